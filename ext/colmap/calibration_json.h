@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// calibration.json: the full calibration of each camera, written beside a
+// model (sparse/<name>/calibration.json) and as ground truth (gt/). Layout:
+//
+// {
+//   "format": "bayon-calibration", "version": 1,
+//   "cameras": [{
+//     "camera_id": 1, "model": "BROWN_BEYER", "width": 1800, "height": 1200,
+//     "pixel_pitch_mm": 0.02,
+//     "params": {"c": 35.0, "x0": 0.0, ..., "B2": 0.0},   // names of the model
+//     "std_devs": {"dc": 0.001, ...},                      // optional
+//     "covariance": [[...]],                               // optional, n x n
+//     "colmap": {"model": "FULL_OPENCV", "params": [...],
+//                "fit_rms_px": 0.01, "fit_max_px": 0.05}   // optional
+//   }]
+// }
+#pragma once
+
+#include "ext/core/camera.h"
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace bayon {
+
+struct CalibrationEntry {
+  Camera camera;
+  std::vector<double> std_devs;    // per parameter; empty if unknown
+  std::vector<double> covariance;  // n x n row-major; empty if unknown
+  std::optional<Camera> colmap_camera;
+  double colmap_fit_rms_px = 0;
+  double colmap_fit_max_px = 0;
+};
+
+// Parameter names of a model, in order ("c", "x0", ... or "f", "cx", ...).
+std::vector<std::string> ParameterNames(CameraModelId model_id);
+
+std::string CalibrationToJson(const std::vector<CalibrationEntry>& entries);
+void WriteCalibrationJson(const std::string& path,
+                          const std::vector<CalibrationEntry>& entries);
+// Throws InputError naming the file and the entry that is wrong.
+std::vector<CalibrationEntry> ReadCalibrationJson(const std::string& path);
+
+}  // namespace bayon

@@ -1,0 +1,250 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/image/image_io.h"
+
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+
+// Exiv2 0.27 (Debian 12) still hands out std::auto_ptr.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-declarations"
+#include <exiv2/exiv2.hpp>
+#pragma GCC diagnostic pop
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+std::string LowerExtension(const std::string& name) {
+  std::string ext = fs::path(name).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) {
+    return std::tolower(c);
+  });
+  return ext;
+}
+
+bool StartsWith(const std::string& data, const char* magic, size_t n) {
+  return data.size() >= n && std::memcmp(data.data(), magic, n) == 0;
+}
+
+uint32_t BigEndian32(const std::string& data, size_t offset) {
+  return (uint32_t(uint8_t(data[offset])) << 24) |
+         (uint32_t(uint8_t(data[offset + 1])) << 16) |
+         (uint32_t(uint8_t(data[offset + 2])) << 8) |
+         uint32_t(uint8_t(data[offset + 3]));
+}
+
+// Checks the container so that truncated files are refused: libjpeg and
+// libpng decode what they get and only warn. Returns an error or "".
+std::string CheckContainer(const std::string& data) {
+  if (StartsWith(data, "\xFF\xD8", 2)) {
+    // JPEG ends with EOI (FF D9); some writers append padding after it.
+    const size_t tail_start = data.size() > 4096 ? data.size() - 4096 : 0;
+    if (data.rfind("\xFF\xD9", std::string::npos) == std::string::npos ||
+        data.rfind("\xFF\xD9") < tail_start) {
+      return "truncated JPEG (no end-of-image marker)";
+    }
+    return "";
+  }
+  if (StartsWith(data, "\x89PNG\r\n\x1a\n", 8)) {
+    if (data.find("IEND") == std::string::npos) {
+      return "truncated PNG (no IEND chunk)";
+    }
+    return "";
+  }
+  return "";
+}
+
+}  // namespace
+
+bool HasImageExtension(const std::string& name) {
+  static const char* kExtensions[] = {".jpg",
+                                      ".jpeg",
+                                      ".png",
+                                      ".tif",
+                                      ".tiff",
+                                      ".bmp",
+                                      ".pgm",
+                                      ".ppm",
+                                      ".pnm",
+                                      ".webp",
+                                      ".jp2",
+                                      ".exr",
+                                      ".hdr"};
+  const std::string ext = LowerExtension(name);
+  return std::any_of(std::begin(kExtensions),
+                     std::end(kExtensions),
+                     [&](const char* known) { return ext == known; });
+}
+
+std::vector<std::string> ListImages(const std::string& folder) {
+  CheckDirectoryExists(folder, "image folder");
+  std::vector<std::string> names;
+  for (const std::string& file : ListFilesRecursive(folder)) {
+    if (HasImageExtension(file)) names.push_back(file);
+  }
+  return names;
+}
+
+cv::Mat ReadImage(const std::string& path, ImageReadMode mode) {
+  const std::string data = ReadFileToString(path);
+  if (data.empty()) ThrowInputError(path, ": empty file, not an image");
+  const std::string problem = CheckContainer(data);
+  if (!problem.empty()) ThrowInputError(path, ": ", problem);
+  int flags = cv::IMREAD_UNCHANGED;
+  if (mode == ImageReadMode::kGray)
+    flags = cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE;
+  if (mode == ImageReadMode::kColor)
+    flags = cv::IMREAD_ANYDEPTH | cv::IMREAD_COLOR;
+  cv::Mat image;
+  try {
+    image = cv::imdecode(cv::Mat(1,
+                                 static_cast<int>(data.size()),
+                                 CV_8U,
+                                 const_cast<char*>(data.data())),
+                         flags);
+  } catch (const cv::Exception& error) {
+    ThrowInputError(path, ": cannot decode image: ", error.what());
+  }
+  if (image.empty()) {
+    ThrowInputError(
+        path, ": not an image OpenCV can read (", data.size(), " bytes)");
+  }
+  return image;
+}
+
+cv::Mat ReadImageGrayFloat(const std::string& path) {
+  cv::Mat image = ReadImage(path, ImageReadMode::kUnchanged);
+  if (image.channels() == 4) {
+    cv::cvtColor(image, image, cv::COLOR_BGRA2GRAY);
+  } else if (image.channels() == 3) {
+    cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
+  } else if (image.channels() != 1) {
+    ThrowInputError(path, ": ", image.channels(), " channels not supported");
+  }
+  double scale = 1.0;
+  switch (image.depth()) {
+    case CV_8U:
+      scale = 1.0;
+      break;
+    case CV_16U:
+      scale = 1.0 / 257.0;
+      break;
+    case CV_32F:
+    case CV_64F:
+      scale = 255.0;  // float images are taken as 0..1
+      break;
+    default:
+      scale = 1.0;
+  }
+  cv::Mat gray;
+  image.convertTo(gray, CV_32F, scale);
+  return gray;
+}
+
+ImageSize ReadImageSize(const std::string& path) {
+  // PNG: IHDR right after the signature. JPEG: the first SOF marker.
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) ThrowInputError(path, ": image not found");
+    ThrowInputError(path, ": cannot open image");
+  }
+  std::string head(65536, '\0');
+  file.read(&head[0], head.size());
+  head.resize(file.gcount());
+  if (StartsWith(head, "\x89PNG\r\n\x1a\n", 8) && head.size() >= 24) {
+    ImageSize size{static_cast<int>(BigEndian32(head, 16)),
+                   static_cast<int>(BigEndian32(head, 20))};
+    if (size.width > 0 && size.height > 0) return size;
+  }
+  if (StartsWith(head, "\xFF\xD8", 2)) {
+    size_t pos = 2;
+    while (pos + 9 < head.size()) {
+      if (uint8_t(head[pos]) != 0xFF) break;
+      const uint8_t marker = uint8_t(head[pos + 1]);
+      const size_t length =
+          (uint8_t(head[pos + 2]) << 8) | uint8_t(head[pos + 3]);
+      const bool sof = (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 &&
+                        marker != 0xC8 && marker != 0xCC);
+      if (sof) {
+        ImageSize size{(uint8_t(head[pos + 7]) << 8) | uint8_t(head[pos + 8]),
+                       (uint8_t(head[pos + 5]) << 8) | uint8_t(head[pos + 6])};
+        if (size.width > 0 && size.height > 0) return size;
+        break;
+      }
+      pos += 2 + length;
+    }
+  }
+  const cv::Mat image = ReadImage(path);
+  return ImageSize{image.cols, image.rows};
+}
+
+std::optional<ExifFocal> ReadExifFocal(const std::string& path) {
+  try {
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-declarations"
+    auto image = Exiv2::ImageFactory::open(path);
+#pragma GCC diagnostic pop
+    if (image.get() == nullptr) return std::nullopt;
+    image->readMetadata();
+    const Exiv2::ExifData& exif = image->exifData();
+    if (exif.empty()) return std::nullopt;
+    ExifFocal focal;
+    auto read = [&](const char* key) -> double {
+      auto it = exif.findKey(Exiv2::ExifKey(key));
+      if (it == exif.end() || it->count() == 0) return 0.0;
+      const double value = it->toFloat();
+      return std::isfinite(value) && value > 0 ? value : 0.0;
+    };
+    focal.focal_length_mm = read("Exif.Photo.FocalLength");
+    focal.focal_length_35mm = read("Exif.Photo.FocalLengthIn35mmFilm");
+    const double x_res = read("Exif.Photo.FocalPlaneXResolution");
+    if (x_res > 0) {
+      // Resolution unit: 2 = inch (default), 3 = cm, 4 = mm.
+      auto unit_it =
+          exif.findKey(Exiv2::ExifKey("Exif.Photo.FocalPlaneResolutionUnit"));
+      const long unit = unit_it != exif.end() ? unit_it->toLong() : 2;
+      const double mm_per_unit = unit == 3 ? 10.0 : unit == 4 ? 1.0 : 25.4;
+      focal.focal_plane_x_res_per_mm = x_res / mm_per_unit;
+    }
+    return focal;
+  } catch (const std::exception&) {
+    return std::nullopt;  // no or unreadable EXIF is not an error
+  }
+}
+
+double FocalLengthPxFromExif(const ExifFocal& exif, int width, int height) {
+  const double max_size = std::max(width, height);
+  if (exif.focal_length_35mm > 0)
+    return exif.focal_length_35mm / 35.0 * max_size;
+  if (exif.focal_length_mm > 0 && exif.focal_plane_x_res_per_mm > 0) {
+    return exif.focal_length_mm * exif.focal_plane_x_res_per_mm;
+  }
+  return 0.0;
+}
+
+void WriteImage(const std::string& path,
+                const cv::Mat& image,
+                const std::vector<int>& params) {
+  std::vector<uchar> buffer;
+  bool ok = false;
+  try {
+    ok = cv::imencode(
+        fs::path(path).extension().string(), image, buffer, params);
+  } catch (const cv::Exception& error) {
+    ThrowInputError(path, ": cannot encode image: ", error.what());
+  }
+  if (!ok) ThrowInputError(path, ": cannot encode image");
+  WriteFileAtomically(path, std::string(buffer.begin(), buffer.end()));
+}
+
+}  // namespace bayon

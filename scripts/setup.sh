@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Installs what bayon needs (Debian 12 packages, with sudo when not root) and
+# builds it in Release. Idempotent: with everything present it only runs an
+# incremental build.
+#   scripts/setup.sh              build into build/
+#   scripts/setup.sh --sanitize   AddressSanitizer + UBSan build into build-asan/
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+build_dir=build
+cmake_args=(-DCMAKE_BUILD_TYPE=Release)
+for arg in "$@"; do
+  case "$arg" in
+    --sanitize)
+      build_dir=build-asan
+      cmake_args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DBAYON_SANITIZE=ON) ;;
+    *) echo "setup.sh: unknown option '$arg'" >&2; exit 2 ;;
+  esac
+done
+
+packages=(
+  build-essential cmake ninja-build pkg-config git ccache
+  colmap sqlite3 libsqlite3-dev
+  libeigen3-dev libceres-dev libgoogle-glog-dev libopencv-dev
+  libpcl-dev libcgal-dev libopenmesh-dev libtbb-dev
+  libcli11-dev nlohmann-json3-dev libexiv2-dev libtinygltf-dev libstb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+missing=()
+for package in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$package")
+  fi
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then sudo=sudo; fi
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
+    "${missing[@]}" >/dev/null
+fi
+
+if command -v ccache >/dev/null; then
+  cmake_args+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
+if [ ! -f "$build_dir/build.ninja" ]; then
+  cmake -S . -B "$build_dir" -G Ninja "${cmake_args[@]}" >/dev/null
+fi
+cmake --build "$build_dir" -j"$(nproc)"
+echo "setup: bayon is built in $build_dir/ ($build_dir/tools/bayon)"

@@ -1,0 +1,348 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// bayon against the real `colmap` 3.8 binary: reading what stock COLMAP
+// writes (databases and models), writing what COLMAP reads, and COLMAP's own
+// maintenance tools on a database bayon has touched.
+#include "ext/colmap/bayon_tables.h"
+#include "ext/colmap/database.h"
+#include "ext/colmap/model_io.h"
+#include "ext/core/file_util.h"
+#include "ext/eval/sparse_eval.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "tests/testing.h"
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+// Stock COLMAP features and exhaustive matches of the temple ring, on the
+// CPU, plus a mapper model: built once, shared by the tests below.
+std::string TempleColmapFixture() {
+  return testing::SharedFixture("temple_colmap", [](const std::string& dir) {
+    const std::string images = testing::DataPath("temple-ring");
+    const std::string db = dir + "/database.db";
+    auto run = [&](const std::vector<std::string>& args) {
+      const testing::CommandResult result = testing::RunColmap(args);
+      ASSERT_EQ(result.exit_code, 0) << result.output;
+    };
+    run({"feature_extractor",
+         "--database_path",
+         db,
+         "--image_path",
+         images,
+         "--SiftExtraction.use_gpu",
+         "0",
+         "--SiftExtraction.num_threads",
+         "2"});
+    run({"exhaustive_matcher",
+         "--database_path",
+         db,
+         "--SiftMatching.use_gpu",
+         "0",
+         "--SiftMatching.num_threads",
+         "2"});
+    fs::create_directories(dir + "/sparse");
+    run({"mapper",
+         "--database_path",
+         db,
+         "--image_path",
+         images,
+         "--output_path",
+         dir + "/sparse",
+         "--Mapper.num_threads",
+         "2"});
+    ASSERT_TRUE(fs::exists(dir + "/sparse/0/images.bin"));
+    fs::create_directories(dir + "/txt");
+    run({"model_converter",
+         "--input_path",
+         dir + "/sparse/0",
+         "--output_path",
+         dir + "/txt",
+         "--output_type",
+         "TXT"});
+  });
+}
+
+int64_t Count(SqliteConnection* db, const std::string& sql) {
+  return db->QueryInt64(sql);
+}
+
+TEST(ColmapInterop, ReadsEveryTableOfAStockDatabase) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string fixture = TempleColmapFixture();
+  const std::string db_path = fixture + "/database.db";
+  const auto before = testing::HashTree(db_path);
+  Database db(db_path, Database::Mode::kReadOnly);
+  EXPECT_EQ(db.schema(), DatabaseSchema::kColmap38);
+  SqliteConnection sql(db_path, SqliteConnection::Mode::kReadOnly);
+
+  EXPECT_EQ(db.NumCameras(), Count(&sql, "SELECT count(*) FROM cameras"));
+  EXPECT_EQ(db.ReadAllCameras().size(), 16u);
+  const std::vector<DatabaseImage> images = db.ReadAllImages();
+  ASSERT_EQ(images.size(), 16u);
+  int64_t num_keypoints = 0, num_descriptors = 0;
+  for (const DatabaseImage& image : images) {
+    const FeatureKeypoints keypoints = db.ReadKeypoints(image.image_id);
+    EXPECT_EQ(keypoints.cols(), 6);
+    num_keypoints += keypoints.rows();
+    num_descriptors += db.ReadDescriptors(image.image_id).rows();
+  }
+  EXPECT_EQ(num_keypoints, Count(&sql, "SELECT sum(rows) FROM keypoints"));
+  EXPECT_EQ(num_descriptors, Count(&sql, "SELECT sum(rows) FROM descriptors"));
+  int64_t num_matches = 0;
+  for (const auto& [pair_id, matches] : db.ReadAllMatches()) {
+    num_matches += matches.rows();
+  }
+  EXPECT_EQ(num_matches, Count(&sql, "SELECT sum(rows) FROM matches"));
+  int64_t num_inliers = 0, num_with_f = 0;
+  for (const auto& [pair_id, geometry] : db.ReadAllTwoViewGeometries()) {
+    num_inliers += geometry.inlier_matches.rows();
+    num_with_f += geometry.F.has_value();
+  }
+  EXPECT_EQ(num_inliers,
+            Count(&sql, "SELECT sum(rows) FROM two_view_geometries"));
+  EXPECT_EQ(num_with_f,
+            Count(&sql,
+                  "SELECT count(*) FROM two_view_geometries "
+                  "WHERE F IS NOT NULL"));
+  EXPECT_GT(num_with_f, 10);
+  EXPECT_EQ(testing::HashTree(db_path), before);
+}
+
+TEST(ColmapInterop, RewritesAStockDatabaseRowByRowAndBlobByBlob) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string fixture = TempleColmapFixture();
+  const std::string dir = testing::TempDir("interop_rewrite");
+  const std::string copy = dir + "/copy.db";
+  {
+    Database src(fixture + "/database.db", Database::Mode::kReadOnly);
+    Database dst(copy, Database::Mode::kCreate);
+    auto transaction = dst.BeginTransaction();
+    for (const Camera& camera : src.ReadAllCameras())
+      dst.WriteCamera(camera, true);
+    for (const DatabaseImage& image : src.ReadAllImages()) {
+      dst.WriteImage(image, true);
+      dst.WriteKeypoints(image.image_id, src.ReadKeypoints(image.image_id));
+      dst.WriteDescriptors(image.image_id, src.ReadDescriptors(image.image_id));
+    }
+    // Canonical order in, canonical order out: no swapping on either side.
+    for (const auto& [pair_id, matches] : src.ReadAllMatches()) {
+      const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+      dst.WriteMatches(id1, id2, matches);
+    }
+    for (const auto& [pair_id, geometry] : src.ReadAllTwoViewGeometries()) {
+      const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+      dst.WriteTwoViewGeometry(id1, id2, geometry);
+    }
+    transaction.Commit();
+  }
+  SqliteConnection sql(copy, SqliteConnection::Mode::kReadWrite);
+  sql.Execute("ATTACH DATABASE '" + fixture + "/database.db' AS stock");
+  for (const char* table : {"cameras",
+                            "images",
+                            "keypoints",
+                            "descriptors",
+                            "matches",
+                            "two_view_geometries"}) {
+    const std::string t = table;
+    const int64_t rows = Count(&sql, "SELECT count(*) FROM " + t);
+    EXPECT_EQ(rows, Count(&sql, "SELECT count(*) FROM stock." + t)) << t;
+    // Rows in one and not the other, compared with every column (blobs by
+    // bytes, NULL equal to NULL).
+    EXPECT_EQ(Count(&sql,
+                    "SELECT count(*) FROM (SELECT * FROM " + t +
+                        " EXCEPT SELECT * FROM stock." + t + ")"),
+              0)
+        << t;
+    EXPECT_EQ(Count(&sql,
+                    "SELECT count(*) FROM (SELECT * FROM stock." + t +
+                        " EXCEPT SELECT * FROM " + t + ")"),
+              0)
+        << t;
+    EXPECT_GT(rows, 0) << t;
+  }
+  EXPECT_EQ(
+      Count(&sql, "SELECT seq FROM sqlite_sequence WHERE name='images'"),
+      Count(&sql, "SELECT seq FROM stock.sqlite_sequence WHERE name='images'"));
+}
+
+TEST(ColmapInterop, MapperModelsRoundTripByteForByte) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string fixture = TempleColmapFixture();
+  const std::string dir = testing::TempDir("interop_models");
+  // Binary: COLMAP's mapper output through bayon and back.
+  const Scene from_bin = ReadModel(fixture + "/sparse/0");
+  fs::create_directories(dir + "/bin");
+  WriteModel(from_bin, dir + "/bin", ModelFormat::kBinary);
+  for (const char* file : {"cameras.bin", "images.bin", "points3D.bin"}) {
+    EXPECT_EQ(ReadFileToString(dir + "/bin/" + file),
+              ReadFileToString(fixture + "/sparse/0/" + file))
+        << file;
+  }
+  // Text: COLMAP's model_converter output through bayon and back.
+  const Scene from_txt = ReadModel(fixture + "/txt");
+  fs::create_directories(dir + "/txt");
+  WriteModel(from_txt, dir + "/txt", ModelFormat::kText);
+  for (const char* file : {"cameras.txt", "images.txt", "points3D.txt"}) {
+    EXPECT_EQ(ReadFileToString(dir + "/txt/" + file),
+              ReadFileToString(fixture + "/txt/" + file))
+        << file;
+  }
+  // The bayon command does the same.
+  const testing::CommandResult converted =
+      testing::RunBayon({"model_converter",
+                         "--input_path",
+                         fixture + "/sparse/0",
+                         "--output_path",
+                         dir + "/cmd_txt",
+                         "--output_type",
+                         "TXT"});
+  ASSERT_EQ(converted.exit_code, 0) << converted.output;
+  fs::create_directories(dir + "/lib_txt");
+  WriteModel(from_bin, dir + "/lib_txt", ModelFormat::kText);
+  EXPECT_EQ(testing::HashTree(dir + "/cmd_txt"),
+            testing::HashTree(dir + "/lib_txt"));
+  // COLMAP reads bayon's files, in both formats.
+  for (const char* format : {"bin", "txt"}) {
+    const testing::CommandResult analyzer =
+        testing::RunColmap({"model_analyzer", "--path", dir + "/" + format});
+    ASSERT_EQ(analyzer.exit_code, 0) << analyzer.output;
+    EXPECT_NE(analyzer.output.find("Registered images: " +
+                                   std::to_string(from_bin.images.size())),
+              std::string::npos)
+        << analyzer.output;
+    EXPECT_NE(analyzer.output.find("Points: " +
+                                   std::to_string(from_bin.points3D.size())),
+              std::string::npos);
+  }
+  fs::create_directories(dir + "/colmap_bin");
+  const testing::CommandResult back = testing::RunColmap({"model_converter",
+                                                          "--input_path",
+                                                          dir + "/txt",
+                                                          "--output_path",
+                                                          dir + "/colmap_bin",
+                                                          "--output_type",
+                                                          "BIN"});
+  EXPECT_EQ(back.exit_code, 0) << back.output;
+  EXPECT_TRUE(fs::exists(dir + "/colmap_bin/points3D.bin"));
+}
+
+// A workspace made only by bayon (synth --scene points) reconstructed by
+// stock `colmap mapper`; the result compared with the truth.
+TEST(ColmapInterop, StockMapperReconstructsABayonDatabase) {
+  const std::string dir = testing::TempDir("interop_mapper");
+  const std::string ws = dir + "/ws";
+  const testing::CommandResult synth = testing::RunBayon({"synth",
+                                                          "--scene",
+                                                          "points",
+                                                          "--output_path",
+                                                          ws,
+                                                          "--num_views",
+                                                          "16",
+                                                          "--keypoint_noise_px",
+                                                          "0.3",
+                                                          "--seed",
+                                                          "7"});
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  const auto bayon_db_before = testing::HashTree(ws + "/database.db");
+  // COLMAP rewrites user_version and the journal mode: give it a copy.
+  testing::CopyTree(ws + "/database.db", dir + "/colmap.db");
+  fs::create_directories(dir + "/sparse");
+  const testing::CommandResult mapper = testing::RunColmap(
+      {"mapper",
+       "--database_path",
+       dir + "/colmap.db",
+       "--image_path",
+       ws + "/images",
+       "--output_path",
+       dir + "/sparse",
+       "--Mapper.num_threads",
+       "2",
+       // bayon hands COLMAP the calibrated camera (the FULL_OPENCV fit of the
+       // true one): refining eight distortion terms from the first image
+       // pair alone makes COLMAP's initial model drift.
+       "--Mapper.ba_refine_extra_params",
+       "0"});
+  ASSERT_EQ(mapper.exit_code, 0) << mapper.output;
+  ASSERT_TRUE(fs::exists(dir + "/sparse/0/images.bin")) << mapper.output;
+  EXPECT_FALSE(fs::exists(dir + "/sparse/1")) << "the block split in two";
+  const Scene model = ReadModel(dir + "/sparse/0");
+  const Scene truth = ReadModel(ws + "/gt/sparse");
+  const SparseEvaluation evaluation = EvaluateSparse(model, truth);
+  EXPECT_EQ(evaluation.num_registered, 16);
+  // Better than 0.1 % of the ring radius (the mean camera distance).
+  EXPECT_LT(evaluation.center_max_relative, 1e-3)
+      << "centre RMS " << evaluation.center_rms << " of "
+      << evaluation.mean_camera_distance;
+  // 0.3 px noise on tracks of 4.7 images: about 0.03 deg (noise-free: 3e-4).
+  EXPECT_LT(evaluation.rotation_max_deg, 0.1);
+  EXPECT_EQ(testing::HashTree(ws + "/database.db"), bayon_db_before);
+
+  // The same through `bayon evaluate`, with its JSON report.
+  const testing::CommandResult evaluate =
+      testing::RunBayon({"evaluate",
+                         "--input_path",
+                         dir + "/sparse/0",
+                         "--ground_truth_path",
+                         ws + "/gt/sparse",
+                         "--output_path",
+                         dir + "/evaluation.json"});
+  ASSERT_EQ(evaluate.exit_code, 0) << evaluate.output;
+  EXPECT_TRUE(fs::exists(dir + "/evaluation.json"));
+
+  // COLMAP's image_deleter works on the model made from bayon's database.
+  WriteFileAtomically(dir + "/delete.txt", "view_003.png\n");
+  fs::create_directories(dir + "/deleted");
+  const testing::CommandResult deleter =
+      testing::RunColmap({"image_deleter",
+                          "--input_path",
+                          dir + "/sparse/0",
+                          "--output_path",
+                          dir + "/deleted",
+                          "--image_names_path",
+                          dir + "/delete.txt"});
+  ASSERT_EQ(deleter.exit_code, 0) << deleter.output;
+  EXPECT_EQ(ReadModel(dir + "/deleted").images.size(), 15u);
+}
+
+TEST(ColmapInterop, DatabaseCleanerKeepsBayonTablesConsistent) {
+  const std::string dir = testing::TempDir("interop_cleaner");
+  const std::string ws = dir + "/ws";
+  ASSERT_EQ(
+      testing::RunBayon({"synth", "--output_path", ws, "--num_points", "300"})
+          .exit_code,
+      0);
+  for (const char* type : {"matches", "features", "images", "all"}) {
+    const std::string copy = dir + "/" + type + ".db";
+    testing::CopyTree(ws + "/database.db", copy);
+    const testing::CommandResult cleaner = testing::RunColmap(
+        {"database_cleaner", "--database_path", copy, "--type", type});
+    ASSERT_EQ(cleaner.exit_code, 0) << type << ": " << cleaner.output;
+    Database db(copy, Database::Mode::kReadOnly);
+    SqliteConnection* sql = db.connection();
+    // No bayon row without its COLMAP row, and none lost while it exists.
+    EXPECT_EQ(sql->QueryInt64("SELECT count(*) FROM bayon_interior WHERE "
+                              "image_id NOT IN (SELECT image_id FROM images)"),
+              0)
+        << type;
+    EXPECT_EQ(sql->QueryInt64("SELECT count(*) FROM bayon_interior"),
+              sql->QueryInt64("SELECT count(*) FROM images"))
+        << type;
+    EXPECT_EQ(
+        sql->QueryInt64("SELECT count(*) FROM bayon_calibration WHERE "
+                        "camera_id NOT IN (SELECT camera_id FROM cameras)"),
+        0)
+        << type;
+    SqliteStatement integrity(sql, "PRAGMA integrity_check");
+    ASSERT_TRUE(integrity.Step());
+    EXPECT_EQ(integrity.ColumnText(0), "ok") << type;
+  }
+}
+
+}  // namespace
+}  // namespace bayon

@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Shared helpers for unit and end-to-end tests: where the real data is, fresh
+// temporary folders, running the `bayon` and `colmap` binaries with their
+// output captured, and checksums of whole folders ("nothing changed").
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace bayon {
+namespace testing {
+
+// ../shared/data (or $BAYON_DATA_DIR); empty if it does not exist.
+std::string DataDir();
+// DataDir() + "/" + relative, or empty if that path does not exist.
+std::string DataPath(const std::string& relative);
+
+// A fresh, empty folder for this test (removed and recreated).
+std::string TempDir(const std::string& name);
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+  // The last non-empty line of the output (the one-line error message).
+  std::string LastLine() const;
+};
+
+// Runs a program with arguments, no shell, capturing its output.
+CommandResult RunCommand(const std::vector<std::string>& argv);
+// Runs the bayon binary built with these tests ($BAYON_BIN).
+CommandResult RunBayon(const std::vector<std::string>& args);
+// Runs stock COLMAP ($BAYON_COLMAP or `colmap`).
+CommandResult RunColmap(const std::vector<std::string>& args);
+
+// Content hashes of every file under a folder (or of one file).
+std::map<std::string, uint64_t> HashTree(const std::string& path);
+
+// A folder built once per build of bayon and shared by the test processes
+// that need it (ctest runs every test in its own process, two at a time): the
+// first caller runs `build(dir)` under a file lock, later ones reuse the
+// result. Keyed by the bayon binary's modification time, so a rebuild makes
+// fresh fixtures.
+std::string SharedFixture(const std::string& name,
+                          const std::function<void(const std::string&)>& build);
+
+// Copies a folder or file.
+void CopyTree(const std::string& from, const std::string& to);
+
+}  // namespace testing
+}  // namespace bayon
+
+// Skips the test with a clear message where ../shared/data is absent (a
+// user's own clone); in CI the folder always exists, so the test runs there.
+#define BAYON_REQUIRE_DATA(relative)                      \
+  do {                                                    \
+    if (::bayon::testing::DataPath(relative).empty()) {   \
+      GTEST_SKIP() << "shared test data '" << relative    \
+                   << "' not found (set BAYON_DATA_DIR)"; \
+    }                                                     \
+  } while (0)

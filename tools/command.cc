@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "tools/command.h"
+
+#include "ext/core/file_util.h"
+
+#include <glog/logging.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+// Appends every log message to a file, one line each, with a timestamp.
+class FileLogSink : public google::LogSink {
+ public:
+  explicit FileLogSink(const std::string& path) : file_(path, std::ios::app) {}
+  void send(google::LogSeverity severity,
+            const char* /*full_filename*/,
+            const char* /*base_filename*/,
+            int /*line*/,
+            const struct ::tm* time,
+            const char* message,
+            size_t message_len) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    char stamp[32];
+    std::strftime(stamp, sizeof(stamp), "%Y-%m-%d %H:%M:%S", time);
+    file_ << stamp << " " << google::GetLogSeverityName(severity)[0] << " "
+          << std::string(message, message_len) << "\n";
+    file_.flush();
+  }
+
+ private:
+  std::ofstream file_;
+  std::mutex mutex_;
+};
+
+}  // namespace
+
+CommandLine::CommandLine(const std::string& command,
+                         const std::string& description)
+    : command_(command), app_(description, "bayon " + command) {
+  app_.set_config("--config", "", "Read options from an INI or TOML file")
+      ->check(CLI::ExistingFile);
+  app_.get_formatter()->column_width(40);
+  app_.option_defaults()->always_capture_default();
+}
+
+bool CommandLine::Parse(int argc, char** argv) {
+  try {
+    app_.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    if (error.get_exit_code() != 0) throw;
+    app_.exit(error);
+    return false;
+  }
+  return true;
+}
+
+void CommandLine::StartLog(const std::string& log_path) {
+  if (log_path.empty()) return;
+  std::error_code ec;
+  const fs::path path(log_path);
+  if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
+  auto sink = std::make_shared<FileLogSink>(log_path);
+  google::AddLogSink(sink.get());
+  log_sink_ = std::shared_ptr<google::LogSink>(
+      sink.get(), [sink](google::LogSink* s) { google::RemoveLogSink(s); });
+  fs::path options_path = path;
+  options_path.replace_extension(".options");
+  WriteFileAtomically(options_path.string(), EffectiveOptions());
+  LOG(INFO) << "bayon " << command_ << " started";
+}
+
+std::string CommandLine::EffectiveOptions() const {
+  return app_.config_to_str(true, false);
+}
+
+std::string WorkspaceLogPath(const std::string& workspace,
+                             const std::string& command) {
+  if (workspace.empty()) return std::string();
+  return (fs::path(workspace) / "logs" / (command + ".log")).string();
+}
+
+void CommandLine::PrintSummary(const std::string& text) const {
+  std::cout << command_ << ": " << text << std::endl;
+  if (log_sink_) {
+    LOG_TO_SINK_BUT_NOT_TO_LOGFILE(log_sink_.get(), INFO)
+        << "summary: " << text;
+  }
+}
+
+}  // namespace bayon

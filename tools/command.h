@@ -1,0 +1,50 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// What every `bayon <command>` shares: a CLI11 parser with --config (the same
+// option names in an INI or TOML file), a log file, the effective options
+// written beside it, and the summary printed at the end. Commands stay thin:
+// parse, check, call one ext/ function, write, summarise.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <glog/logging.h>
+
+#include <memory>
+#include <string>
+
+namespace bayon {
+
+class CommandLine {
+ public:
+  CommandLine(const std::string& command, const std::string& description);
+
+  CLI::App& app() { return app_; }
+  const std::string& command() const { return command_; }
+
+  // Parses argv (argv[0] is the command name). Returns false when help was
+  // asked for and printed (the command then returns 0). Other CLI11 errors
+  // propagate as CLI::ParseError; main() makes them one line and exit code 2.
+  bool Parse(int argc, char** argv);
+
+  // Starts logging to `log_path` (appending) and writes the effective options
+  // next to it as <stem>.options. Empty `log_path` logs to stderr only.
+  void StartLog(const std::string& log_path);
+
+  // The effective options as INI text (what --config would read back).
+  std::string EffectiveOptions() const;
+
+  // Prints "<command>: <text>" to stdout and writes it to the log file.
+  void PrintSummary(const std::string& text) const;
+
+ private:
+  std::string command_;
+  CLI::App app_;
+  std::shared_ptr<google::LogSink> log_sink_;
+};
+
+// For commands on a workspace: <workspace>/logs/<command>.log, creating the
+// folder; empty when workspace is empty.
+std::string WorkspaceLogPath(const std::string& workspace,
+                             const std::string& command);
+
+}  // namespace bayon

@@ -1,0 +1,14 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+namespace bayon {
+
+// One function per command, each in tools/<command>.cc. argv[0] is the
+// command name. They return the exit code: 0 done, 1 ran but produced
+// nothing usable; bad input throws InputError (exit 2 in main).
+int RunImport(int argc, char** argv);
+int RunModelConverter(int argc, char** argv);
+int RunSynth(int argc, char** argv);
+int RunEvaluate(int argc, char** argv);
+
+}  // namespace bayon

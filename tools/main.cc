@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// `bayon <command> [options]`: dispatch, logging set-up, and the exit codes
+// every command shares: 0 success, 1 ran but produced nothing usable,
+// 2 bad input (one line naming what is wrong).
+#include "ext/core/errors.h"
+#include "tools/commands.h"
+
+#include <CLI/CLI.hpp>
+#include <glog/logging.h>
+
+#include <cstring>
+#include <iostream>
+#include <string>
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*run)(int, char**);
+  const char* description;
+};
+
+// In the order of the processing chain (architecture.md).
+constexpr Command kCommands[] = {
+    {"import",
+     bayon::RunImport,
+     "create camera and image rows for a folder of images"},
+    {"synth", bayon::RunSynth, "make a synthetic workspace with known truth"},
+    {"model_converter",
+     bayon::RunModelConverter,
+     "convert a sparse model between BIN, TXT and PLY"},
+    {"evaluate", bayon::RunEvaluate, "compare a result with the ground truth"},
+};
+
+void PrintUsage() {
+  std::cout << "bayon: photogrammetric reconstruction on COLMAP's data\n\n"
+               "Usage: bayon <command> [options]   (bayon <command> -h for "
+               "its options)\n\nCommands:\n";
+  for (const Command& command : kCommands) {
+    std::cout << "  " << command.name
+              << std::string(18 - std::strlen(command.name), ' ')
+              << command.description << "\n";
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  google::InitGoogleLogging(argv[0]);
+  FLAGS_logtostderr = true;
+  FLAGS_log_prefix = false;
+  FLAGS_colorlogtostderr = false;
+
+  if (argc < 2 || std::strcmp(argv[1], "-h") == 0 ||
+      std::strcmp(argv[1], "--help") == 0 ||
+      std::strcmp(argv[1], "help") == 0) {
+    PrintUsage();
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string name = argv[1];
+  for (const Command& command : kCommands) {
+    if (name != command.name) continue;
+    try {
+      return command.run(argc - 1, argv + 1);
+    } catch (const CLI::ParseError& error) {
+      std::cerr << "bayon " << name << ": error: " << error.what()
+                << " (see bayon " << name << " -h)" << std::endl;
+      return 2;
+    } catch (const bayon::InputError& error) {
+      std::cerr << "bayon " << name << ": error: " << error.what() << std::endl;
+      return 2;
+    } catch (const bayon::RunFailure& error) {
+      std::cerr << "bayon " << name << ": failed: " << error.what()
+                << std::endl;
+      return 1;
+    } catch (const std::exception& error) {
+      std::cerr << "bayon " << name << ": internal error: " << error.what()
+                << std::endl;
+      return 1;
+    }
+  }
+  std::cerr << "bayon: unknown command '" << name
+            << "' (bayon -h lists the commands)" << std::endl;
+  return 2;
+}
