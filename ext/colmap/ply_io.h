@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// PLY files (Turk 1994) for point clouds and triangle meshes: ASCII and
+// binary (either byte order) on read, binary little-endian or ASCII on write.
+// Vertex properties x y z are required; nx ny nz, red green blue (uchar) and
+// any other scalar properties are kept (as PointAttribute); faces come from a
+// `vertex_indices` (or `vertex_index`) list, polygons split into triangles as
+// fans, and an optional `texcoord` list of 6 floats per triangle (MeshLab's
+// convention). Other elements are skipped. Readers check every count against
+// the bytes left and name the file, the element and the line or byte.
+#pragma once
+
+#include "ext/core/point_cloud.h"
+
+#include <string>
+
+namespace bayon {
+
+struct PlyWriteOptions {
+  bool binary = true;
+  // x y z as double (bayon's own files) or float (what COLMAP's
+  // poisson_mesher and most viewers expect).
+  bool double_coordinates = true;
+  // Written as a comment line in the header, e.g. the producing command.
+  std::string comment;
+};
+
+// Reads vertices and faces. A file without faces gives an empty face list.
+TriangleMesh ReadPly(const std::string& path);
+// Reads a point cloud (faces, if any, are ignored).
+PointCloud ReadPointCloudPly(const std::string& path);
+// Reads a mesh; throws InputError if the file has no faces.
+TriangleMesh ReadMeshPly(const std::string& path);
+
+// Writes atomically (temporary name, rename).
+void WritePointCloudPly(const PointCloud& cloud,
+                        const std::string& path,
+                        const PlyWriteOptions& options = {});
+void WriteMeshPly(const TriangleMesh& mesh,
+                  const std::string& path,
+                  const PlyWriteOptions& options = {});
+
+}  // namespace bayon
