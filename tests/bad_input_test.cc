@@ -226,6 +226,36 @@ TEST_F(BadModel, OutputThatExistsWithoutOverwrite) {
   EXPECT_EQ(overwrite.exit_code, 0) << overwrite.output;
 }
 
+TEST(BadInput, ConfigFileWithUnknownKey) {
+  const std::string dir = testing::TempDir("bad_config");
+  const std::string images = MakeImages(dir + "/images");
+  WriteFileAtomically(dir + "/bad.ini",
+                      "single_camera = 1\nsingel_camera = 1\n");
+  ExpectRefused({"import",
+                 "--config",
+                 dir + "/bad.ini",
+                 "--image_path",
+                 images,
+                 "--database_path",
+                 dir + "/db.db"},
+                "singel_camera",
+                {images, dir + "/bad.ini"});
+  EXPECT_FALSE(fs::exists(dir + "/db.db"));
+  // The example config of the repository is accepted.
+  const testing::CommandResult ok =
+      testing::RunBayon({"import",
+                         "--config",
+                         std::string(BAYON_SOURCE_DIR) + "/configs/import.ini",
+                         "--image_path",
+                         images,
+                         "--database_path",
+                         dir + "/db.db"});
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  Database db(dir + "/db.db", Database::Mode::kReadOnly);
+  EXPECT_EQ(db.NumCameras(), 1);  // single_camera = 1 from the file
+  EXPECT_EQ(db.NumImages(), 2);
+}
+
 TEST(BadInput, UnknownFlagAndUnknownCommand) {
   const testing::CommandResult flag = testing::RunBayon({"import",
                                                          "--image_path",

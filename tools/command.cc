@@ -46,6 +46,8 @@ CommandLine::CommandLine(const std::string& command,
     : command_(command), app_(description, "bayon " + command) {
   app_.set_config("--config", "", "Read options from an INI or TOML file")
       ->check(CLI::ExistingFile);
+  // A key the command does not know is a typo, not something to ignore.
+  app_.allow_config_extras(CLI::config_extras_mode::error);
   app_.get_formatter()->column_width(40);
   app_.option_defaults()->always_capture_default();
 }

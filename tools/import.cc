@@ -149,8 +149,19 @@ int RunImport(int argc, char** argv) {
                     ": no images found (looked for jpg, "
                     "png, tif, bmp, pgm/ppm, webp, jp2, exr, hdr)");
   }
-  const std::vector<ImageFacts> facts = InspectImages(options, names);
-  if (options.single_camera) {
+  // Images already in an existing database are left alone, unread.
+  std::vector<std::string> new_names;
+  if (fs::exists(options.database_path)) {
+    Database existing(options.database_path, Database::Mode::kReadOnly);
+    for (const std::string& name : names) {
+      if (!existing.ReadImageWithName(name)) new_names.push_back(name);
+    }
+  } else {
+    new_names = names;
+  }
+  const int num_skipped = static_cast<int>(names.size() - new_names.size());
+  const std::vector<ImageFacts> facts = InspectImages(options, new_names);
+  if (options.single_camera && !facts.empty()) {
     for (const ImageFacts& fact : facts) {
       if (fact.width != facts[0].width || fact.height != facts[0].height) {
         ThrowInputError(fact.name,
@@ -177,7 +188,7 @@ int RunImport(int argc, char** argv) {
       created ? options.database_path + TempSuffix() : options.database_path;
   TempFileGuard temp_guard(created ? target : std::string());
   if (!created) temp_guard.Keep();
-  int num_added = 0, num_skipped = 0, num_cameras = 0, num_priors = 0;
+  int num_added = 0, num_cameras = 0, num_priors = 0;
   {
     Database database(
         target, created ? Database::Mode::kCreate : Database::Mode::kReadWrite);
@@ -185,10 +196,7 @@ int RunImport(int argc, char** argv) {
     auto transaction = database.BeginTransaction();
     camera_t shared_camera_id = kInvalidCameraId;
     for (const ImageFacts& fact : facts) {
-      if (database.ReadImageWithName(fact.name)) {
-        ++num_skipped;
-        continue;
-      }
+      if (database.ReadImageWithName(fact.name)) continue;  // added meanwhile
       camera_t camera_id = shared_camera_id;
       if (camera_id == kInvalidCameraId) {
         Camera camera = MakeCamera(options, fact);
