@@ -270,5 +270,30 @@ TEST(BadInput, UnknownFlagAndUnknownCommand) {
   EXPECT_EQ(testing::RunBayon({"no_such_command"}).exit_code, 2);
 }
 
+// bayon features / match / relative / disparity (issue 4): a database
+// without images, images missing on disk.
+TEST(BadInput, OrientationChainWithoutImages) {
+  const std::string dir = testing::TempDir("bad_orientation");
+  const std::string images = MakeImages(dir + "/images");
+  { Database db(dir + "/empty.db", Database::Mode::kCreate); }
+  ExpectRefused({"features",
+                 "--database_path",
+                 dir + "/empty.db",
+                 "--image_path",
+                 images},
+                "has no images",
+                {dir + "/empty.db", images});
+  ASSERT_EQ(
+      testing::RunBayon(
+          {"import", "--image_path", images, "--database_path", dir + "/db.db"})
+          .exit_code,
+      0);
+  fs::rename(images + "/b.jpg", dir + "/b.jpg");
+  ExpectRefused(
+      {"features", "--database_path", dir + "/db.db", "--image_path", images},
+      "b.jpg: listed in",
+      {dir + "/db.db", images});
+}
+
 }  // namespace
 }  // namespace bayon

@@ -10,5 +10,6 @@ int RunImport(int argc, char** argv);
 int RunModelConverter(int argc, char** argv);
 int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);
+int RunFeatures(int argc, char** argv);
 
 }  // namespace bayon

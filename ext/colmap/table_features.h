@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// bayon_keypoint_interest: what the interest operator said about each
+// keypoint of an image (written by `bayon features`). The keypoints
+// themselves are in COLMAP's `keypoints` table, row for row in the same
+// order; a record whose row count differs from the keypoints row is stale
+// (the keypoints were replaced by another tool) and is ignored by readers.
+#pragma once
+
+#include "ext/colmap/bayon_tables.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace bayon {
+
+struct KeypointInterestRecord {
+  std::string detector = "moravec";
+  int window_size = 0;  // operator window, pixels
+  int patch_size = 0;   // thinning patch side, pixels
+  // One value per keypoint row (squared grey values, 0..255 scale).
+  std::vector<float> interest;
+};
+
+extern const BayonTable kKeypointInterestTable;
+
+void WriteKeypointInterest(Database* database,
+                           image_t image_id,
+                           const KeypointInterestRecord& record);
+std::optional<KeypointInterestRecord> ReadKeypointInterest(Database* database,
+                                                           image_t image_id);
+void DeleteKeypointInterest(Database* database, image_t image_id);
+
+}  // namespace bayon
+
+namespace bayon {
+
+// Removes everything that refers to an image's keypoints by index, before
+// its keypoints are replaced: COLMAP's descriptors row, the matches and
+// two-view geometries of every pair with this image, and the rows of every
+// bayon_* table keyed by an image pair (columns image_id1, image_id2).
+// Returns the number of image pairs whose matches were removed.
+int DeleteKeypointDependents(Database* database, image_t image_id);
+
+}  // namespace bayon

@@ -1,0 +1,182 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/features/feature_extraction.h"
+
+#include "ext/colmap/database.h"
+#include "ext/colmap/table_features.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/core/parallel.h"
+#include "ext/core/progress.h"
+#include "ext/image/image_io.h"
+
+#include <glog/logging.h>
+
+#include <filesystem>
+#include <map>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+
+void FeatureExtractionOptions::Check() const { moravec.Check(); }
+
+std::vector<InterestPoint> DetectImageFeatures(const std::string& image_file,
+                                               const MoravecOptions& options) {
+  return DetectMoravecPoints(ReadImageGrayFloat(image_file), options);
+}
+
+namespace {
+
+struct Job {
+  DatabaseImage image;
+  std::string path;
+  ImageFeatureResult result;
+  std::vector<InterestPoint> points;
+};
+
+// Every image must be on disk with the size its camera row claims, checked
+// from the file headers before any work.
+std::vector<Job> PlanJobs(Database* database,
+                          const std::string& image_path,
+                          const FeatureExtractionOptions& options) {
+  const std::vector<DatabaseImage> images = database->ReadAllImages();
+  if (images.empty()) {
+    ThrowInputError(database->path(),
+                    ": the database has no images (run `bayon import` or "
+                    "`colmap feature_extractor` first)");
+  }
+  std::map<camera_t, Camera> cameras;
+  for (const Camera& camera : database->ReadAllCameras()) {
+    cameras.emplace(camera.camera_id, camera);
+  }
+  std::vector<std::string> missing;
+  std::vector<Job> jobs;
+  for (const DatabaseImage& image : images) {
+    Job job;
+    job.image = image;
+    job.path = (fs::path(image_path) / image.name).string();
+    job.result.image_id = image.image_id;
+    job.result.name = image.name;
+    if (!fs::is_regular_file(job.path)) {
+      missing.push_back(image.name);
+      continue;
+    }
+    const ImageSize size = ReadImageSize(job.path);
+    job.result.width = size.width;
+    job.result.height = size.height;
+    const auto camera = cameras.find(image.camera_id);
+    if (camera == cameras.end()) {
+      ThrowInputError(database->path(),
+                      ": image ",
+                      image.name,
+                      " refers to camera ",
+                      image.camera_id,
+                      ", which is not in the cameras table");
+    }
+    if (camera->second.width != static_cast<uint64_t>(size.width) ||
+        camera->second.height != static_cast<uint64_t>(size.height)) {
+      ThrowInputError(job.path,
+                      ": ",
+                      size.width,
+                      "x",
+                      size.height,
+                      " pixels, but its camera ",
+                      image.camera_id,
+                      " in ",
+                      database->path(),
+                      " is ",
+                      camera->second.width,
+                      "x",
+                      camera->second.height);
+    }
+    if (!options.overwrite && database->ExistsKeypoints(image.image_id) &&
+        database->ReadKeypoints(image.image_id).rows() > 0) {
+      job.result.skipped = true;
+      job.result.reason = "has keypoints (--overwrite 1 replaces them)";
+    }
+    jobs.push_back(std::move(job));
+  }
+  if (!missing.empty()) {
+    ThrowInputError((fs::path(image_path) / missing.front()).string(),
+                    ": listed in ",
+                    database->path(),
+                    " but missing on disk (",
+                    missing.size(),
+                    " of ",
+                    images.size(),
+                    " images missing)");
+  }
+  return jobs;
+}
+
+}  // namespace
+
+FeatureExtractionSummary ExtractFeatures(
+    const std::string& database_path,
+    const std::string& image_path,
+    const FeatureExtractionOptions& options) {
+  options.Check();
+  CheckFileExists(database_path, "--database_path");
+  CheckDirectoryExists(image_path, "--image_path");
+  Timer timer;
+  Database database(database_path, Database::Mode::kReadWrite);
+  CheckBayonSchema(&database);
+  database.CheckWritable("keypoints");
+  std::vector<Job> jobs = PlanJobs(&database, image_path, options);
+
+  std::vector<int> todo;
+  for (int i = 0; i < static_cast<int>(jobs.size()); ++i) {
+    if (!jobs[i].result.skipped) todo.push_back(i);
+  }
+  Progress progress("Extracting Moravec points", todo.size(), "images");
+  ParallelFor(todo.size(), options.num_threads, [&](int k) {
+    Job& job = jobs[todo[k]];
+    Timer image_timer;
+    job.points = DetectImageFeatures(job.path, options.moravec);
+    job.result.num_features = static_cast<int>(job.points.size());
+    job.result.patch_size =
+        ThinningPatchSize(options.moravec, job.result.width, job.result.height);
+    job.result.seconds = image_timer.Seconds();
+    progress.Add();
+  });
+  progress.Finish();
+
+  FeatureExtractionSummary summary;
+  {
+    auto transaction = database.BeginTransaction();
+    EnsureBayonTable(&database, kKeypointInterestTable);
+    for (Job& job : jobs) {
+      if (job.result.skipped) {
+        LOG(INFO) << job.result.name << ": skipped, " << job.result.reason;
+        ++summary.num_skipped;
+        summary.images.push_back(job.result);
+        continue;
+      }
+      summary.num_pairs_invalidated +=
+          DeleteKeypointDependents(&database, job.image.image_id);
+      std::vector<Eigen::Vector2d> xy;
+      KeypointInterestRecord record;
+      record.window_size = options.moravec.window_size;
+      record.patch_size = job.result.patch_size;
+      xy.reserve(job.points.size());
+      for (const InterestPoint& point : job.points) {
+        xy.push_back(point.xy.cast<double>());
+        record.interest.push_back(point.interest);
+      }
+      database.WriteKeypoints(job.image.image_id, KeypointsFromXY(xy));
+      WriteKeypointInterest(&database, job.image.image_id, record);
+      LOG(INFO) << job.result.name << ": " << job.result.num_features
+                << " points (" << job.result.width << "x" << job.result.height
+                << ", patch " << job.result.patch_size << " px) in "
+                << job.result.seconds << " s";
+      ++summary.num_extracted;
+      summary.num_features += job.result.num_features;
+      summary.images.push_back(job.result);
+    }
+    transaction.Commit();
+  }
+  summary.seconds = timer.Seconds();
+  return summary;
+}
+
+}  // namespace bayon

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/features/feature_extraction.h"
+
+#include "ext/colmap/database.h"
+#include "ext/colmap/table_features.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/image/image_io.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+
+#include "tests/testing.h"
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+cv::Mat Texture(int width, int height, unsigned seed) {
+  cv::Mat image(height, width, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(image, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.2);
+  return image;
+}
+
+// A database with three images: 8-bit grey, 16-bit grey and 8-bit colour
+// versions of the same texture.
+std::string MakeWorkspace(const std::string& name) {
+  const std::string dir = testing::TempDir(name);
+  fs::create_directories(dir + "/images");
+  const cv::Mat texture = Texture(160, 120, 11);
+  cv::Mat gray8, gray16, color;
+  texture.convertTo(gray8, CV_8U);
+  gray8.convertTo(gray16, CV_16U, 257.0);
+  cv::cvtColor(gray8, color, cv::COLOR_GRAY2BGR);
+  WriteImage(dir + "/images/a.png", gray8);
+  WriteImage(dir + "/images/b.png", gray16);
+  WriteImage(dir + "/images/c.png", color);
+  Database database(dir + "/database.db", Database::Mode::kCreate);
+  const camera_t camera_id = database.WriteCamera(
+      Camera::Create(CameraModelId::kSimpleRadial, 200, 160, 120));
+  for (const char* image_name : {"a.png", "b.png", "c.png"}) {
+    DatabaseImage image;
+    image.name = image_name;
+    image.camera_id = camera_id;
+    database.WriteImage(image);
+  }
+  return dir;
+}
+
+FeatureExtractionOptions SmallOptions() {
+  FeatureExtractionOptions options;
+  options.moravec.max_num_features = 100;
+  options.num_threads = 2;
+  return options;
+}
+
+TEST(FeatureExtraction, WritesKeypointsAndInterestForAnyDepth) {
+  const std::string dir = MakeWorkspace("features_depths");
+  const FeatureExtractionSummary summary =
+      ExtractFeatures(dir + "/database.db", dir + "/images", SmallOptions());
+  EXPECT_EQ(summary.num_extracted, 3);
+  EXPECT_EQ(summary.num_skipped, 0);
+  Database database(dir + "/database.db", Database::Mode::kReadOnly);
+  const FeatureKeypoints a = database.ReadKeypoints(1);
+  ASSERT_GT(a.rows(), 50);
+  EXPECT_EQ(a.cols(), 6);
+  // The same picture in 16 bits and in colour gives the same points.
+  EXPECT_EQ(database.ReadKeypoints(2), a);
+  EXPECT_EQ(database.ReadKeypoints(3), a);
+  const auto interest = ReadKeypointInterest(&database, 1);
+  ASSERT_TRUE(interest.has_value());
+  EXPECT_EQ(interest->detector, "moravec");
+  EXPECT_EQ(interest->interest.size(), static_cast<size_t>(a.rows()));
+  EXPECT_GE(interest->interest.back(), SmallOptions().moravec.min_interest);
+  EXPECT_FALSE(database.ExistsDescriptors(1));
+}
+
+TEST(FeatureExtraction, KeepsKeypointsUnlessOverwriteThenDropsTheirMatches) {
+  const std::string dir = MakeWorkspace("features_overwrite");
+  const std::string db = dir + "/database.db";
+  FeatureExtractionOptions options = SmallOptions();
+  ExtractFeatures(db, dir + "/images", options);
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    FeatureMatches matches(2, 2);
+    matches << 0, 1, 2, 3;
+    database.WriteMatches(1, 2, matches);
+    database.WriteMatches(2, 3, matches);
+  }
+  options.moravec.max_num_features = 20;
+  const FeatureExtractionSummary kept =
+      ExtractFeatures(db, dir + "/images", options);
+  EXPECT_EQ(kept.num_skipped, 3);
+  {
+    Database database(db, Database::Mode::kReadOnly);
+    EXPECT_GT(database.ReadKeypoints(1).rows(), 20);
+    EXPECT_EQ(database.NumMatchedPairs(), 2);
+  }
+  options.overwrite = true;
+  const FeatureExtractionSummary replaced =
+      ExtractFeatures(db, dir + "/images", options);
+  EXPECT_EQ(replaced.num_extracted, 3);
+  EXPECT_EQ(replaced.num_pairs_invalidated, 2);
+  Database database(db, Database::Mode::kReadOnly);
+  EXPECT_EQ(database.ReadKeypoints(1).rows(), 20);
+  EXPECT_EQ(database.NumMatchedPairs(), 0);
+}
+
+TEST(FeatureExtraction, RefusesBadInputBeforeWriting) {
+  const std::string dir = MakeWorkspace("features_bad");
+  const std::string db = dir + "/database.db";
+  fs::remove(dir + "/images/b.png");
+  const auto before = testing::HashTree(db);
+  try {
+    ExtractFeatures(db, dir + "/images", SmallOptions());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("b.png"), std::string::npos);
+    EXPECT_NE(std::string(error.what()).find("missing on disk"),
+              std::string::npos);
+  }
+  EXPECT_EQ(testing::HashTree(db), before);
+
+  const std::string empty = dir + "/empty.db";
+  { Database database(empty, Database::Mode::kCreate); }
+  try {
+    ExtractFeatures(empty, dir + "/images", SmallOptions());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("no images"), std::string::npos);
+  }
+  // An image whose size is not its camera's.
+  WriteImage(dir + "/images/b.png", cv::Mat(50, 60, CV_8U, cv::Scalar(3)));
+  EXPECT_THROW(ExtractFeatures(db, dir + "/images", SmallOptions()),
+               InputError);
+  EXPECT_EQ(testing::HashTree(db), before);
+}
+
+}  // namespace
+}  // namespace bayon
