@@ -88,6 +88,13 @@ std::string WorkspaceLogPath(const std::string& workspace,
   return (fs::path(workspace) / "logs" / (command + ".log")).string();
 }
 
+std::string WorkspaceOfStageFile(const std::string& path) {
+  const fs::path folder = fs::absolute(path).parent_path();
+  const std::string name = folder.filename().string();
+  if (name == "dense" || name == "mesh") return folder.parent_path().string();
+  return folder.string();
+}
+
 void CommandLine::PrintSummary(const std::string& text) const {
   std::cout << command_ << ": " << text << std::endl;
   if (log_sink_) {

@@ -47,4 +47,8 @@ class CommandLine {
 std::string WorkspaceLogPath(const std::string& workspace,
                              const std::string& command);
 
+// The workspace a stage file belongs to: W for W/dense/x or W/mesh/x, else
+// the file's own folder.
+std::string WorkspaceOfStageFile(const std::string& path);
+
 }  // namespace bayon

@@ -11,5 +11,7 @@ int RunModelConverter(int argc, char** argv);
 int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);
 int RunFeatures(int argc, char** argv);
+int RunEdit(int argc, char** argv);
+int RunSynthCloud(int argc, char** argv);
 
 }  // namespace bayon

@@ -1,0 +1,472 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/cloud/cloud_edit.h"
+
+#include "ext/cloud/local_quadric.h"
+#include "ext/cloud/pcl_cloud.h"
+#include "ext/core/errors.h"
+#include "ext/core/parallel.h"
+#include "ext/core/progress.h"
+
+#include <glog/logging.h>
+#include <pcl/filters/radius_outlier_removal.h>
+#include <pcl/filters/statistical_outlier_removal.h>
+#include <pcl/kdtree/kdtree_flann.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+namespace bayon {
+namespace {
+
+constexpr int kBlockSize = 512;
+
+void ForEachPointInBlocks(size_t n,
+                          int num_threads,
+                          const std::function<void(size_t)>& fn) {
+  const int num_blocks = static_cast<int>((n + kBlockSize - 1) / kBlockSize);
+  ParallelFor(num_blocks, num_threads, [&](int block) {
+    const size_t end = std::min(n, size_t{kBlockSize} * (block + 1));
+    for (size_t i = size_t{kBlockSize} * block; i < end; ++i) fn(i);
+  });
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const size_t k = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+// One pass of the local surface test over every point, with patches fitted
+// to the points not flagged by the previous pass.
+void SurfaceFitPass(const PointCloud& cloud,
+                    const std::vector<Eigen::Vector3d>& sigmas,
+                    const SurfaceFitEditOptions& options,
+                    double min_variance,
+                    int num_threads,
+                    std::vector<EditReason>* reasons,
+                    EditIterationReport* report) {
+  const size_t n = cloud.size();
+  std::vector<int> inliers;
+  inliers.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    if ((*reasons)[i] == EditReason::kKept) inliers.push_back(i);
+  }
+  const CenteredPclCloud pcl_cloud(cloud.positions, inliers);
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(pcl_cloud.cloud);
+
+  const int k = options.num_neighbors;
+  const bool weighted = !sigmas.empty();
+  // First the k nearest unflagged neighbours of every point (itself left
+  // out) and the normal of every unflagged point from its neighbourhood.
+  std::vector<int> neighbor_index(n * k, -1);
+  std::vector<Eigen::Vector3d> normals(n, Eigen::Vector3d::Zero());
+  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
+    std::vector<int> found(k + 1);
+    std::vector<float> squared_distances(k + 1);
+    const int num_found = tree.nearestKSearch(
+        pcl_cloud.ToPcl(cloud.positions[i]), k + 1, found, squared_distances);
+    int count = 0;
+    for (int j = 0; j < num_found && count < k; ++j) {
+      const int index = inliers[found[j]];
+      if (index != static_cast<int>(i)) neighbor_index[i * k + count++] = index;
+    }
+    if ((*reasons)[i] != EditReason::kKept || count < 3) return;
+    std::vector<Eigen::Vector3d> own = {cloud.positions[i]};
+    for (int j = 0; j < count; ++j) {
+      own.push_back(cloud.positions[neighbor_index[i * k + j]]);
+    }
+    Eigen::Matrix3d axes;
+    Eigen::Vector3d eigenvalues;
+    PrincipalAxes(own, &axes, &eigenvalues);
+    if (eigenvalues(1) > 1e-12 * eigenvalues(0)) normals[i] = axes.col(2);
+  });
+
+  // Then every point against the patch of its neighbours, in a frame whose
+  // normal is their mean normal.
+  // Per point: deviation from its patch, the patch's variance factor, and
+  // the variance of the deviation before scaling by that factor; NaN when
+  // the patch could not be fitted (the point is kept, untested).
+  const double kNaN = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> deviation(n, kNaN), factor(n, kNaN), unit_variance(n);
+  QuadricFitOptions fit_options;
+  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
+    std::vector<Eigen::Vector3d> neighbors, neighbor_sigmas, neighbor_normals;
+    neighbors.reserve(k);
+    neighbor_normals.reserve(k);
+    for (int j = 0; j < k && neighbor_index[i * k + j] >= 0; ++j) {
+      const int index = neighbor_index[i * k + j];
+      neighbors.push_back(cloud.positions[index]);
+      if (weighted) neighbor_sigmas.push_back(sigmas[index]);
+      if (normals[index].squaredNorm() > 0) {
+        neighbor_normals.push_back(normals[index]);
+      }
+    }
+    const QuadricPatch patch = FitQuadricPatch(cloud.positions[i],
+                                               neighbors,
+                                               neighbor_sigmas,
+                                               MeanAxis(neighbor_normals),
+                                               fit_options);
+    if (!patch.valid) return;
+    deviation[i] = patch.QueryDeviation();
+    factor[i] = patch.variance_factor;
+    // The point's own variance along the normal (1 in units of the factor
+    // without stated precision) plus the patch's height uncertainty.
+    unit_variance[i] =
+        (weighted ? VarianceAlong(patch.frame.col(2), sigmas[i]) : 1.0) +
+        patch.c0_variance;
+  });
+
+  // The factor scales the test where the surface is rougher than a quadric
+  // at this scale, but never below the cloud's typical (median) factor, nor
+  // below 1 with stated precision: a factor from ~20 residuals is noisy, and
+  // a small one is mostly chance.
+  std::vector<double> factors;
+  factors.reserve(n);
+  for (double f : factor) {
+    if (!std::isnan(f)) factors.push_back(f);
+  }
+  double floor = Median(std::move(factors));
+  if (weighted) floor = std::max(floor, 1.0);
+  std::vector<EditReason> next(n, EditReason::kKept);
+  std::vector<double> normalized(n, -1.0);  // -1: not tested
+  for (size_t i = 0; i < n; ++i) {
+    if (std::isnan(deviation[i])) continue;
+    const double variance =
+        std::max(std::max(factor[i], floor) * unit_variance[i], min_variance);
+    normalized[i] = std::abs(deviation[i]) / std::sqrt(variance);
+    if (normalized[i] > options.max_deviation_sigma) {
+      next[i] = EditReason::kDeviationSigma;
+    } else if (options.max_deviation_m > 0 &&
+               std::abs(deviation[i]) > options.max_deviation_m) {
+      next[i] = EditReason::kDeviationAbsolute;
+    }
+  }
+
+  std::vector<double> tested;
+  tested.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    const bool was = (*reasons)[i] != EditReason::kKept;
+    const bool is = next[i] != EditReason::kKept;
+    if (normalized[i] >= 0) {
+      tested.push_back(normalized[i]);
+      ++report->num_tested;
+    } else {
+      ++report->num_untested;
+    }
+    if (is) ++report->num_flagged;
+    if (is && !was) ++report->num_newly_flagged;
+    if (was && !is) ++report->num_restored;
+    if (next[i] == EditReason::kDeviationSigma) ++report->num_sigma;
+    if (next[i] == EditReason::kDeviationAbsolute) ++report->num_absolute;
+  }
+  report->median_normalized_deviation = Median(std::move(tested));
+  *reasons = std::move(next);
+}
+
+// The median distance from a point to its nearest neighbour, over up to
+// 20000 points spread over the cloud.
+double MedianSpacing(const CenteredPclCloud& pcl_cloud) {
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(pcl_cloud.cloud);
+  const size_t n = pcl_cloud.cloud->size();
+  const size_t step = std::max<size_t>(1, n / 20000);
+  std::vector<double> spacing;
+  std::vector<int> found(2);
+  std::vector<float> squared(2);
+  for (size_t i = 0; i < n; i += step) {
+    if (tree.nearestKSearch((*pcl_cloud.cloud)[i], 2, found, squared) == 2) {
+      spacing.push_back(std::sqrt(squared[1]));
+    }
+  }
+  return Median(std::move(spacing));
+}
+
+void RunStatistical(const PointCloud& cloud,
+                    const StatisticalEditOptions& options,
+                    std::vector<EditReason>* reasons) {
+  const CenteredPclCloud pcl_cloud(cloud.positions);
+  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> filter(true);
+  filter.setInputCloud(pcl_cloud.cloud);
+  filter.setMeanK(options.mean_k);
+  filter.setStddevMulThresh(options.stddev_mul);
+  pcl::Indices kept;
+  filter.filter(kept);
+  for (const auto index : *filter.getRemovedIndices()) {
+    (*reasons)[index] = EditReason::kStatistical;
+  }
+}
+
+double RunRadius(const PointCloud& cloud,
+                 const RadiusEditOptions& options,
+                 std::vector<EditReason>* reasons) {
+  const CenteredPclCloud pcl_cloud(cloud.positions);
+  const double radius =
+      options.radius_m > 0 ? options.radius_m : 5.0 * MedianSpacing(pcl_cloud);
+  pcl::RadiusOutlierRemoval<pcl::PointXYZ> filter(true);
+  filter.setInputCloud(pcl_cloud.cloud);
+  filter.setRadiusSearch(radius);
+  filter.setMinNeighborsInRadius(options.min_neighbors);
+  pcl::Indices kept;
+  filter.filter(kept);
+  for (const auto index : *filter.getRemovedIndices()) {
+    (*reasons)[index] = EditReason::kRadius;
+  }
+  return radius;
+}
+
+}  // namespace
+
+std::string CloudEditMethodName(CloudEditMethod method) {
+  switch (method) {
+    case CloudEditMethod::kSurfaceFit:
+      return "surface_fit";
+    case CloudEditMethod::kStatistical:
+      return "statistical";
+    case CloudEditMethod::kRadius:
+      return "radius";
+  }
+  return "?";
+}
+
+CloudEditMethod ParseCloudEditMethod(const std::string& name) {
+  for (CloudEditMethod method : {CloudEditMethod::kSurfaceFit,
+                                 CloudEditMethod::kStatistical,
+                                 CloudEditMethod::kRadius}) {
+    if (name == CloudEditMethodName(method)) return method;
+  }
+  ThrowInputError(
+      "--method must be one of surface_fit, statistical, radius "
+      "(got '",
+      name,
+      "')");
+}
+
+std::string EditReasonName(EditReason reason) {
+  switch (reason) {
+    case EditReason::kKept:
+      return "kept";
+    case EditReason::kDeviationSigma:
+      return "deviation beyond the sigma threshold";
+    case EditReason::kDeviationAbsolute:
+      return "deviation beyond the absolute threshold";
+    case EditReason::kStatistical:
+      return "statistical outlier";
+    case EditReason::kRadius:
+      return "too few neighbours within the radius";
+  }
+  return "?";
+}
+
+void SurfaceFitEditOptions::Check() const {
+  CheckOption(num_neighbors >= 8 && num_neighbors <= 500,
+              "--num_neighbors",
+              "in [8, 500]",
+              num_neighbors);
+  CheckOption(num_iterations >= 1 && num_iterations <= 20,
+              "--num_iterations",
+              "in [1, 20]",
+              num_iterations);
+  CheckOption(max_deviation_sigma > 0,
+              "--max_deviation_sigma",
+              "> 0",
+              max_deviation_sigma);
+  CheckOption(
+      max_deviation_m >= 0, "--max_deviation_m", ">= 0", max_deviation_m);
+}
+
+void StatisticalEditOptions::Check() const {
+  CheckOption(mean_k >= 2, "--mean_k", ">= 2", mean_k);
+  CheckOption(stddev_mul > 0, "--stddev_mul", "> 0", stddev_mul);
+}
+
+void RadiusEditOptions::Check() const {
+  CheckOption(radius_m >= 0, "--radius_m", ">= 0 (0 = automatic)", radius_m);
+  CheckOption(min_neighbors >= 1, "--min_neighbors", ">= 1", min_neighbors);
+}
+
+void CloudEditOptions::Check() const {
+  surface_fit.Check();
+  statistical.Check();
+  radius.Check();
+}
+
+std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
+                                         const std::string& what) {
+  const PointAttribute* attributes[3] = {cloud.FindAttribute("sx"),
+                                         cloud.FindAttribute("sy"),
+                                         cloud.FindAttribute("sz")};
+  for (const PointAttribute* attribute : attributes) {
+    if (attribute == nullptr) return {};
+  }
+  std::vector<Eigen::Vector3d> sigmas(cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double s = attributes[k]->values[i];
+      if (!(s > 0) || !std::isfinite(s)) {
+        ThrowInputError(what,
+                        ": point ",
+                        i,
+                        " has ",
+                        attributes[k]->name,
+                        " = ",
+                        s,
+                        "; standard deviations must be positive and finite");
+      }
+      sigmas[i](k) = s;
+    }
+  }
+  return sigmas;
+}
+
+void CheckCloudSpansSurface(const PointCloud& cloud,
+                            size_t min_points,
+                            const std::string& what) {
+  if (cloud.empty()) ThrowInputError(what, ": the cloud has no points");
+  if (cloud.size() < min_points) {
+    ThrowInputError(what,
+                    ": ",
+                    cloud.size(),
+                    " points are too few (need at least ",
+                    min_points,
+                    ")");
+  }
+  cloud.Check(what);
+  const size_t step = std::max<size_t>(1, cloud.size() / 100000);
+  std::vector<Eigen::Vector3d> sample;
+  for (size_t i = 0; i < cloud.size(); i += step) {
+    sample.push_back(cloud.positions[i]);
+  }
+  Eigen::Matrix3d axes;
+  Eigen::Vector3d eigenvalues;
+  PrincipalAxes(sample, &axes, &eigenvalues);
+  if (!(eigenvalues(1) > 1e-10 * eigenvalues(0))) {
+    ThrowInputError(what,
+                    ": all ",
+                    cloud.size(),
+                    " points lie on one line (or coincide); there is no "
+                    "surface to fit");
+  }
+}
+
+std::string CloudEditReport::Summary() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(2);
+  out << CloudEditMethodName(method) << ": " << num_input << " points in, "
+      << num_kept << " kept, " << num_removed << " removed ("
+      << (num_input > 0 ? 100.0 * num_removed / num_input : 0.0) << " %) in "
+      << seconds << " s";
+  if (method == CloudEditMethod::kSurfaceFit) {
+    out << (used_point_precision ? "; weights and sigma units from sx, sy, sz"
+                                 : "; sigma units from the local scatter");
+    out << (converged ? "; converged" : "");
+  }
+  if (method == CloudEditMethod::kRadius)
+    out << "; radius " << radius_m << " m";
+  size_t counts[5] = {0, 0, 0, 0, 0};
+  for (EditReason reason : reasons) ++counts[static_cast<int>(reason)];
+  for (int r = 1; r < 5; ++r) {
+    if (counts[r] > 0) {
+      out << "\n  removed " << counts[r] << ": "
+          << EditReasonName(static_cast<EditReason>(r));
+    }
+  }
+  for (const EditIterationReport& it : iterations) {
+    out << "\n  iteration " << it.iteration << ": tested " << it.num_tested
+        << " (untested " << it.num_untested << "), flagged " << it.num_flagged
+        << " (new " << it.num_newly_flagged << ", restored " << it.num_restored
+        << "; by sigma " << it.num_sigma << ", absolute " << it.num_absolute
+        << "), median |d|/sigma " << std::setprecision(3)
+        << it.median_normalized_deviation << std::setprecision(2) << ", "
+        << it.seconds << " s";
+  }
+  return out.str();
+}
+
+PointCloud EditPointCloud(const PointCloud& cloud,
+                          const CloudEditOptions& options,
+                          CloudEditReport* report,
+                          const std::string& what) {
+  options.Check();
+  const Timer timer;
+  const int min_points = options.method == CloudEditMethod::kSurfaceFit
+                             ? options.surface_fit.num_neighbors + 1
+                             : 3;
+  CheckCloudSpansSurface(cloud, min_points, what);
+  *report = CloudEditReport();
+  report->method = options.method;
+  report->num_input = cloud.size();
+  report->reasons.assign(cloud.size(), EditReason::kKept);
+
+  if (options.method == CloudEditMethod::kSurfaceFit) {
+    std::vector<Eigen::Vector3d> sigmas;
+    if (options.surface_fit.use_point_precision) {
+      sigmas = PointSigmas(cloud, what);
+    }
+    report->used_point_precision = !sigmas.empty();
+    Eigen::Vector3d min = cloud.positions[0], max = cloud.positions[0];
+    for (const Eigen::Vector3d& p : cloud.positions) {
+      min = min.cwiseMin(p);
+      max = max.cwiseMax(p);
+    }
+    // A floor for the deviation's variance, so that noise-free input is not
+    // judged against a zero scatter.
+    const double min_variance = std::pow(1e-7 * (max - min).norm(), 2);
+    for (int iteration = 1; iteration <= options.surface_fit.num_iterations;
+         ++iteration) {
+      const Timer pass_timer;
+      EditIterationReport pass;
+      pass.iteration = iteration;
+      SurfaceFitPass(cloud,
+                     sigmas,
+                     options.surface_fit,
+                     min_variance,
+                     options.num_threads,
+                     &report->reasons,
+                     &pass);
+      pass.seconds = pass_timer.Seconds();
+      LOG(INFO) << "edit: iteration " << iteration << ": " << pass.num_flagged
+                << " flagged (" << pass.num_newly_flagged << " new, "
+                << pass.num_restored << " restored)";
+      report->iterations.push_back(pass);
+      if (iteration > 1 && pass.num_newly_flagged == 0 &&
+          pass.num_restored == 0) {
+        report->converged = true;
+        break;
+      }
+    }
+  } else {
+    const Timer pass_timer;
+    if (options.method == CloudEditMethod::kStatistical) {
+      RunStatistical(cloud, options.statistical, &report->reasons);
+    } else {
+      report->radius_m = RunRadius(cloud, options.radius, &report->reasons);
+    }
+    EditIterationReport pass;
+    pass.iteration = 1;
+    pass.num_tested = cloud.size();
+    for (EditReason reason : report->reasons) {
+      if (reason != EditReason::kKept) ++pass.num_flagged;
+    }
+    pass.num_newly_flagged = pass.num_flagged;
+    pass.seconds = pass_timer.Seconds();
+    report->iterations.push_back(pass);
+  }
+
+  std::vector<bool> keep(cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    keep[i] = report->reasons[i] == EditReason::kKept;
+  }
+  PointCloud edited = cloud;
+  edited.Filter(keep);
+  report->num_kept = edited.size();
+  report->num_removed = cloud.size() - edited.size();
+  report->seconds = timer.Seconds();
+  return edited;
+}
+
+}  // namespace bayon

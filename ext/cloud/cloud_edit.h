@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Point-cloud editing: blunder removal without smoothing (the Bayon paper,
+// sec. 3.4, an adaptation of Fua and Sander 1992's iterative local surface
+// fitting without resampling or surface clustering).
+//
+// kSurfaceFit: in every iteration, around every point a second-order patch
+// in a local frame (local_quadric.h) is fitted to its k nearest neighbours
+// among the points not currently flagged (a k-d tree of PCL), weighted by the
+// neighbours' own precision (the sx, sy, sz attributes of `bayon dense`) when
+// the cloud has them. The point is flagged when its deviation from its patch
+// exceeds `max_deviation_sigma` standard deviations of that deviation
+// (its own sigma along the normal, the patch's height uncertainty, and the
+// local roughness beyond the stated precision), or `max_deviation_m`. Every
+// point, flagged or not, is tested again in the next iteration against
+// patches fitted without the flagged points, so a good point that a nearby
+// blunder had pulled away comes back. Only the points still flagged after the
+// last iteration are deleted; the kept points are written unchanged (no
+// resampling, no smoothing).
+//
+// kStatistical and kRadius are PCL's StatisticalOutlierRemoval and
+// RadiusOutlierRemoval, for comparison.
+#pragma once
+
+#include "ext/core/point_cloud.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace bayon {
+
+enum class CloudEditMethod { kSurfaceFit, kStatistical, kRadius };
+
+// "surface_fit", "statistical", "radius"; ParseCloudEditMethod throws
+// InputError listing the choices.
+std::string CloudEditMethodName(CloudEditMethod method);
+CloudEditMethod ParseCloudEditMethod(const std::string& name);
+
+struct SurfaceFitEditOptions {
+  // Neighbours per patch. More smooths the patch over more relief (misfit
+  // on sharp features); fewer makes its height uncertain.
+  int num_neighbors = 24;
+  // Passes of fitting and testing; the paper uses 3 to 5. Stops early when
+  // a pass flags exactly the points the previous one did.
+  int num_iterations = 4;
+  // Threshold in standard deviations of the deviation. Larger keeps more
+  // blunders, smaller deletes good points in rough places.
+  double max_deviation_sigma = 3.5;
+  // Absolute threshold in metres; 0 = off. With both set, either flags.
+  double max_deviation_m = 0;
+  // Weight by and test in units of the points' own precision (sx, sy, sz)
+  // when present; otherwise (or when off) the local scatter around each
+  // patch is the unit.
+  bool use_point_precision = true;
+  void Check() const;
+};
+
+struct StatisticalEditOptions {
+  // PCL StatisticalOutlierRemoval: a point goes when its mean distance to its
+  // mean_k neighbours exceeds the mean over all points by stddev_mul
+  // standard deviations.
+  int mean_k = 24;
+  double stddev_mul = 2.0;
+  void Check() const;
+};
+
+struct RadiusEditOptions {
+  // PCL RadiusOutlierRemoval: a point goes when fewer than min_neighbors
+  // other points lie within radius_m. 0 = 5 x the median nearest-neighbour
+  // distance.
+  double radius_m = 0;
+  int min_neighbors = 6;
+  void Check() const;
+};
+
+struct CloudEditOptions {
+  CloudEditMethod method = CloudEditMethod::kSurfaceFit;
+  SurfaceFitEditOptions surface_fit;
+  StatisticalEditOptions statistical;
+  RadiusEditOptions radius;
+  int num_threads = -1;  // -1 = all cores
+  void Check() const;
+};
+
+// Why a point was deleted.
+enum class EditReason : uint8_t {
+  kKept = 0,
+  kDeviationSigma,     // beyond max_deviation_sigma
+  kDeviationAbsolute,  // beyond max_deviation_m
+  kStatistical,
+  kRadius,
+};
+std::string EditReasonName(EditReason reason);
+
+struct EditIterationReport {
+  int iteration = 0;  // 1-based
+  size_t num_tested = 0;
+  size_t num_untested = 0;  // neighbourhood too small or degenerate: kept
+  size_t num_flagged = 0;   // flagged after this pass
+  size_t num_newly_flagged = 0;
+  size_t num_restored = 0;  // flagged before, within the threshold now
+  size_t num_sigma = 0;     // flagged by the sigma test ...
+  size_t num_absolute = 0;  // ... and by the absolute one only
+  // Median of |deviation| / sigma over the tested points: 0.674 when the
+  // stated precision matches the scatter of a normal distribution.
+  double median_normalized_deviation = 0;
+  double seconds = 0;
+};
+
+struct CloudEditReport {
+  CloudEditMethod method = CloudEditMethod::kSurfaceFit;
+  size_t num_input = 0;
+  size_t num_kept = 0;
+  size_t num_removed = 0;
+  bool used_point_precision = false;
+  bool converged = false;  // the last pass changed nothing
+  double radius_m = 0;     // kRadius: the radius used
+  std::vector<EditIterationReport> iterations;
+  std::vector<EditReason> reasons;  // per input point
+  double seconds = 0;
+  // A few lines for the summary and the log.
+  std::string Summary() const;
+};
+
+// Checks the cloud (not empty, finite, enough points, not all on a line:
+// InputError naming `what`), edits it, and returns the kept points with all
+// their attributes, in the input order.
+PointCloud EditPointCloud(const PointCloud& cloud,
+                          const CloudEditOptions& options,
+                          CloudEditReport* report,
+                          const std::string& what = "point cloud");
+
+// The per-axis standard deviations sx, sy, sz of every point, or empty when
+// the cloud lacks one of them. Throws InputError naming `what` when one is
+// not a positive finite number.
+std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
+                                         const std::string& what);
+
+// Throws InputError naming `what` when the cloud has fewer than
+// `min_points` points, or all of them lie on one line (or coincide).
+void CheckCloudSpansSurface(const PointCloud& cloud,
+                            size_t min_points,
+                            const std::string& what);
+
+}  // namespace bayon

@@ -1,0 +1,137 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/cloud/cloud_edit.h"
+
+#include "ext/core/errors.h"
+#include "ext/eval/cloud_edit_eval.h"
+#include "ext/synth/cloud_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+
+namespace bayon {
+namespace {
+
+struct Scene {
+  TriangleMesh truth;
+  PointCloud cloud;
+};
+
+Scene ReliefCylinderScene(int num_points, bool with_sigmas, uint64_t seed) {
+  ReliefCylinderOptions surface;
+  surface.num_angles = 540;
+  surface.num_heights = 300;
+  Scene scene;
+  scene.truth = MakeReliefCylinder(surface);
+  NoisyCloudOptions options;
+  options.num_points = num_points;
+  options.with_sigmas = with_sigmas;
+  options.seed = seed;
+  scene.cloud = SampleNoisyCloud(scene.truth, options);
+  return scene;
+}
+
+CloudEditEvaluation Edit(const Scene& scene,
+                         const CloudEditOptions& options,
+                         const std::string& label,
+                         CloudEditReport* report) {
+  const PointCloud edited = EditPointCloud(scene.cloud, options, report);
+  const CloudEditEvaluation e =
+      EvaluateCloudEdit(scene.cloud, edited, scene.truth, 2);
+  std::cout << report->Summary() << "\n"
+            << CloudEditEvaluation::TableHeader() << "\n"
+            << e.Table(label) << std::endl;
+  return e;
+}
+
+TEST(CloudEdit, SurfaceFitRemovesBlundersWithoutSmoothing) {
+  const Scene scene = ReliefCylinderScene(40000, true, 11);
+  CloudEditReport report;
+  const CloudEditEvaluation e =
+      Edit(scene, CloudEditOptions(), "surface_fit", &report);
+  EXPECT_GE(e.BlundersRemovedFraction(), 0.95);
+  EXPECT_LT(e.GoodRemovedFraction(), 0.01);
+  EXPECT_LE(e.kept_after.rms, e.good_before.rms);
+  EXPECT_TRUE(report.used_point_precision);
+  EXPECT_GE(report.iterations.size(), 2u);
+  // The stated precision matches the noise: |d| / sigma has the median of a
+  // standard normal's absolute value.
+  EXPECT_NEAR(report.iterations.back().median_normalized_deviation, 0.674, 0.1);
+  // The kept points are the input points, unchanged and in order.
+  const PointCloud edited = EditPointCloud(scene.cloud, {}, &report);
+  size_t j = 0;
+  for (size_t i = 0; i < scene.cloud.size(); ++i) {
+    if (report.reasons[i] != EditReason::kKept) continue;
+    ASSERT_EQ(edited.positions[j], scene.cloud.positions[i]);
+    ++j;
+  }
+  EXPECT_EQ(j, edited.size());
+}
+
+TEST(CloudEdit, WorksWithoutPrecisionAndComparesWithPcl) {
+  const Scene scene = ReliefCylinderScene(40000, false, 12);
+  CloudEditReport report;
+  CloudEditEvaluation e =
+      Edit(scene, CloudEditOptions(), "surface_fit (no sigma)", &report);
+  EXPECT_FALSE(report.used_point_precision);
+  EXPECT_GE(e.BlundersRemovedFraction(), 0.95);
+  EXPECT_LT(e.GoodRemovedFraction(), 0.01);
+  EXPECT_LE(e.kept_after.rms, e.good_before.rms);
+
+  CloudEditOptions options;
+  options.method = CloudEditMethod::kStatistical;
+  e = Edit(scene, options, "pcl statistical", &report);
+  EXPECT_GT(report.num_removed, 0u);
+  EXPECT_EQ(report.iterations.size(), 1u);
+  options.method = CloudEditMethod::kRadius;
+  e = Edit(scene, options, "pcl radius", &report);
+  EXPECT_GT(report.radius_m, 0);
+}
+
+TEST(CloudEdit, AbsoluteThreshold) {
+  const Scene scene = ReliefCylinderScene(20000, true, 13);
+  CloudEditOptions options;
+  options.surface_fit.max_deviation_sigma = 1000;  // only the absolute test
+  options.surface_fit.max_deviation_m = 0.05;
+  CloudEditReport report;
+  const CloudEditEvaluation e = Edit(scene, options, "absolute 5 cm", &report);
+  // Blunders are uniform in 1..20 cm: about (20 - 5) / 19 of them go.
+  EXPECT_NEAR(e.BlundersRemovedFraction(), 15.0 / 19, 0.08);
+  EXPECT_EQ(e.num_good_after, e.num_good_before);
+  for (EditReason reason : report.reasons) {
+    EXPECT_TRUE(reason == EditReason::kKept ||
+                reason == EditReason::kDeviationAbsolute);
+  }
+}
+
+TEST(CloudEdit, RefusesBadClouds) {
+  CloudEditReport report;
+  PointCloud empty;
+  EXPECT_THROW(EditPointCloud(empty, {}, &report, "e.ply"), InputError);
+  PointCloud line;
+  for (int i = 0; i < 100; ++i) line.positions.emplace_back(i, 2 * i, 3 * i);
+  try {
+    EditPointCloud(line, {}, &report, "line.ply");
+    FAIL() << "a line was accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what())
+                  .find("line.ply: all 100 points lie on "
+                        "one line"),
+              std::string::npos)
+        << error.what();
+  }
+  Scene scene = ReliefCylinderScene(2000, true, 14);
+  scene.cloud.FindAttribute("sy")->values[17] = -1;
+  EXPECT_THROW(EditPointCloud(scene.cloud, {}, &report), InputError);
+  scene.cloud.positions[3].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(EditPointCloud(scene.cloud, {}, &report), InputError);
+  CloudEditOptions options;
+  options.surface_fit.num_iterations = 0;
+  EXPECT_THROW(options.Check(), InputError);
+  EXPECT_THROW(ParseCloudEditMethod("median"), InputError);
+}
+
+}  // namespace
+}  // namespace bayon

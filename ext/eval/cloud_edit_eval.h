@@ -1,0 +1,38 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// How well an edit removed the blunders of a synthetic cloud whose points
+// carry the `blunder` flag (ext/synth/cloud_scene.h): blunders and good
+// points before and after, and the distances to the true surface of the
+// blunder-free input (the reference an edit must not worsen: no smoothing)
+// and of everything the edit kept.
+#pragma once
+
+#include "ext/core/point_cloud.h"
+#include "ext/eval/mesh_distance.h"
+
+#include <string>
+
+namespace bayon {
+
+struct CloudEditEvaluation {
+  size_t num_blunders_before = 0;
+  size_t num_blunders_after = 0;
+  size_t num_good_before = 0;
+  size_t num_good_after = 0;
+  double BlundersRemovedFraction() const;
+  double GoodRemovedFraction() const;
+  DistanceStatistics good_before;  // the blunder-free input
+  DistanceStatistics kept_after;   // every point the edit kept
+  DistanceStatistics good_after;   // the good points it kept
+
+  std::string Table(const std::string& label) const;  // one line
+  static std::string TableHeader();
+};
+
+// Throws InputError when a cloud lacks the `blunder` attribute.
+CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
+                                      const PointCloud& after,
+                                      const TriangleMesh& truth,
+                                      int num_threads = -1);
+
+}  // namespace bayon

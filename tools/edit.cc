@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/cloud/cloud_edit.h"
+#include "ext/colmap/ply_io.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+#include <nlohmann/json.hpp>
+
+namespace bayon {
+namespace {
+
+nlohmann::ordered_json ReportToJson(const CloudEditReport& report,
+                                    const std::string& input_path) {
+  nlohmann::ordered_json json;
+  json["input_path"] = input_path;
+  json["method"] = CloudEditMethodName(report.method);
+  json["num_input"] = report.num_input;
+  json["num_kept"] = report.num_kept;
+  json["num_removed"] = report.num_removed;
+  json["used_point_precision"] = report.used_point_precision;
+  json["converged"] = report.converged;
+  if (report.method == CloudEditMethod::kRadius) {
+    json["radius_m"] = report.radius_m;
+  }
+  json["seconds"] = report.seconds;
+  nlohmann::ordered_json reasons = nlohmann::ordered_json::object();
+  size_t counts[5] = {0, 0, 0, 0, 0};
+  for (EditReason reason : report.reasons) ++counts[static_cast<int>(reason)];
+  for (int r = 1; r < 5; ++r) {
+    if (counts[r] > 0) {
+      reasons[EditReasonName(static_cast<EditReason>(r))] = counts[r];
+    }
+  }
+  json["removed_by_reason"] = reasons;
+  json["iterations"] = nlohmann::ordered_json::array();
+  for (const EditIterationReport& it : report.iterations) {
+    json["iterations"].push_back(
+        {{"iteration", it.iteration},
+         {"num_tested", it.num_tested},
+         {"num_untested", it.num_untested},
+         {"num_flagged", it.num_flagged},
+         {"num_newly_flagged", it.num_newly_flagged},
+         {"num_restored", it.num_restored},
+         {"num_sigma", it.num_sigma},
+         {"num_absolute", it.num_absolute},
+         {"median_normalized_deviation", it.median_normalized_deviation},
+         {"seconds", it.seconds}});
+  }
+  return json;
+}
+
+}  // namespace
+
+int RunEdit(int argc, char** argv) {
+  std::string input_path, output_path, removed_path, report_path, log_path;
+  std::string method_name = "surface_fit";
+  bool overwrite = false;
+  CloudEditOptions options;
+  CommandLine command(
+      "edit",
+      "Remove blunders from a dense point cloud without smoothing it: "
+      "iterative local second-order surface fitting (Fua and Sander 1992, as "
+      "adapted in the Bayon paper, sec. 3.4), weighted by the points' own "
+      "precision (sx, sy, sz); or PCL's statistical / radius outlier removal "
+      "for comparison. Kept points are written unchanged.");
+  CLI::App& app = command.app();
+  app.add_option("--input_path", input_path, "Point cloud (PLY)")->required();
+  app.add_option("--output_path", output_path, "Edited cloud (PLY)")
+      ->required();
+  app.add_option("--method", method_name, "surface_fit, statistical, radius")
+      ->transform(CLI::IsMember({"surface_fit", "statistical", "radius"}));
+  app.add_option("--num_neighbors",
+                 options.surface_fit.num_neighbors,
+                 "surface_fit: neighbours per second-order patch");
+  app.add_option("--num_iterations",
+                 options.surface_fit.num_iterations,
+                 "surface_fit: passes of fitting and testing (paper: 3-5)");
+  app.add_option("--max_deviation_sigma",
+                 options.surface_fit.max_deviation_sigma,
+                 "surface_fit: delete beyond this many standard deviations");
+  app.add_option("--max_deviation_m",
+                 options.surface_fit.max_deviation_m,
+                 "surface_fit: delete beyond this distance, metres (0 = off)");
+  app.add_option("--use_point_precision",
+                 options.surface_fit.use_point_precision,
+                 "surface_fit: 1 = weights and sigma units from sx, sy, sz");
+  app.add_option("--mean_k",
+                 options.statistical.mean_k,
+                 "statistical: neighbours for the mean distance");
+  app.add_option("--stddev_mul",
+                 options.statistical.stddev_mul,
+                 "statistical: threshold in standard deviations");
+  app.add_option("--radius_m",
+                 options.radius.radius_m,
+                 "radius: search radius, metres (0 = 5 x median spacing)");
+  app.add_option("--min_neighbors",
+                 options.radius.min_neighbors,
+                 "radius: fewest neighbours within the radius");
+  app.add_option("--num_threads", options.num_threads, "-1 = all cores");
+  app.add_option("--removed_path",
+                 removed_path,
+                 "Also write the removed points here (PLY, attribute "
+                 "edit_reason: 1 sigma, 2 absolute, 3 statistical, 4 radius)");
+  app.add_option(
+      "--report_path", report_path, "Write the report (per pass) as JSON");
+  app.add_option("--overwrite", overwrite, "Replace existing output files");
+  app.add_option(
+      "--log_path", log_path, "Log file (default <workspace>/logs/edit.log)");
+  if (!command.Parse(argc, argv)) return 0;
+  options.method = ParseCloudEditMethod(method_name);
+  options.Check();
+  CheckFileExists(input_path, "--input_path");
+  CheckOutputPath(output_path, overwrite);
+  if (!removed_path.empty()) CheckOutputPath(removed_path, overwrite);
+  if (!report_path.empty()) CheckOutputPath(report_path, overwrite);
+  if (log_path.empty()) {
+    log_path = WorkspaceLogPath(WorkspaceOfStageFile(output_path), "edit");
+  }
+  command.StartLog(log_path);
+
+  const PointCloud cloud = ReadPointCloudPly(input_path);
+  CloudEditReport report;
+  const PointCloud edited = EditPointCloud(cloud, options, &report, input_path);
+  if (edited.empty()) {
+    throw RunFailure(StrCat(input_path, ": the edit removed every point"));
+  }
+  PlyWriteOptions write_options;
+  write_options.comment = "bayon edit --method " + method_name;
+  WritePointCloudPly(edited, output_path, write_options);
+  if (!removed_path.empty()) {
+    PointCloud removed = cloud;
+    PointAttribute& reason =
+        removed.AddAttribute("edit_reason", PlyScalarType::kUChar);
+    std::vector<bool> is_removed(cloud.size());
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      reason.values[i] = static_cast<double>(report.reasons[i]);
+      is_removed[i] = report.reasons[i] != EditReason::kKept;
+    }
+    removed.Filter(is_removed);
+    WritePointCloudPly(removed, removed_path, write_options);
+  }
+  if (!report_path.empty()) {
+    WriteFileAtomically(report_path,
+                        ReportToJson(report, input_path).dump(2) + "\n");
+  }
+  command.PrintSummary(report.Summary() + "\n  -> " + output_path);
+  return 0;
+}
+
+}  // namespace bayon

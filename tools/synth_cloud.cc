@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/colmap/ply_io.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/synth/cloud_scene.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+namespace bayon {
+
+int RunSynthCloud(int argc, char** argv) {
+  std::string shape = "relief_cylinder";
+  std::string input_path, output_path, truth_path;
+  bool overwrite = false;
+  NoisyCloudOptions options;
+  ReliefCylinderOptions cylinder;
+  BoxTowerOptions tower;
+  TorusOptions torus;
+  CommandLine command(
+      "synth_cloud",
+      "Write a synthetic dense cloud with known truth, for testing edit and "
+      "mesh: points sampled from a built-in surface or from a mesh (e.g. a "
+      "synthetic workspace's gt/surface.ply), with Gaussian noise, per-point "
+      "sx, sy, sz, optional true normals, and blunders flagged in a "
+      "`blunder` attribute.");
+  CLI::App& app = command.app();
+  app.add_option("--shape", shape, "relief_cylinder, box_tower, torus, mesh")
+      ->transform(
+          CLI::IsMember({"relief_cylinder", "box_tower", "torus", "mesh"}));
+  app.add_option("--input_path", input_path, "shape mesh: the surface (PLY)");
+  app.add_option("--output_path", output_path, "Cloud to write (PLY)")
+      ->required();
+  app.add_option("--truth_path", truth_path, "Also write the true surface");
+  app.add_option("--num_points", options.num_points, "Points to sample");
+  app.add_option("--sigma_m",
+                 options.sigma_m,
+                 "Mean standard deviation per coordinate, metres");
+  app.add_option("--sigma_spread",
+                 options.sigma_spread,
+                 "Per-point sigmas spread +- this fraction around sigma_m");
+  app.add_option("--blunder_fraction",
+                 options.blunder_fraction,
+                 "Share of points displaced along the normal");
+  app.add_option("--blunder_min_m", options.blunder_min_m, "Smallest offset");
+  app.add_option("--blunder_max_m", options.blunder_max_m, "Largest offset");
+  app.add_option("--with_normals", options.with_normals, "1: true normals");
+  app.add_option("--with_sigmas", options.with_sigmas, "1: sx, sy, sz");
+  app.add_option("--seed", options.seed, "Random seed");
+  app.add_option("--relief_m",
+                 cylinder.relief_m,
+                 "relief_cylinder: relief amplitude, metres");
+  app.add_option("--overwrite", overwrite, "Replace existing files");
+  if (!command.Parse(argc, argv)) return 0;
+  options.Check();
+  CheckOutputPath(output_path, overwrite);
+  if (!truth_path.empty()) CheckOutputPath(truth_path, overwrite);
+
+  TriangleMesh surface;
+  if (shape == "mesh") {
+    if (input_path.empty()) {
+      ThrowInputError("--input_path is required with --shape mesh");
+    }
+    CheckFileExists(input_path, "--input_path");
+    surface = ReadMeshPly(input_path);
+  } else if (shape == "relief_cylinder") {
+    surface = MakeReliefCylinder(cylinder);
+  } else if (shape == "box_tower") {
+    surface = MakeBoxTower(tower);
+  } else {
+    surface = MakeTorus(torus);
+  }
+  const PointCloud cloud = SampleNoisyCloud(surface, options);
+  PlyWriteOptions write_options;
+  write_options.comment = "bayon synth_cloud --shape " + shape;
+  WritePointCloudPly(cloud, output_path, write_options);
+  if (!truth_path.empty()) WriteMeshPly(surface, truth_path, write_options);
+  command.PrintSummary(
+      StrCat(shape,
+             ": ",
+             cloud.size(),
+             " points (",
+             std::llround(options.blunder_fraction * cloud.size()),
+             " blunders) -> ",
+             output_path));
+  return 0;
+}
+
+}  // namespace bayon
