@@ -95,6 +95,14 @@ std::string WorkspaceOfStageFile(const std::string& path) {
   return folder.string();
 }
 
+std::string DatabaseLogPath(const std::string& log_path,
+                            const std::string& database_path,
+                            const std::string& command) {
+  if (!log_path.empty()) return log_path;
+  return WorkspaceLogPath(fs::absolute(database_path).parent_path().string(),
+                          command);
+}
+
 void CommandLine::PrintSummary(const std::string& text) const {
   std::cout << command_ << ": " << text << std::endl;
   if (log_sink_) {

@@ -50,5 +50,10 @@ std::string WorkspaceLogPath(const std::string& workspace,
 // The workspace a stage file belongs to: W for W/dense/x or W/mesh/x, else
 // the file's own folder.
 std::string WorkspaceOfStageFile(const std::string& path);
+// For commands on a database: `log_path` if given, else
+// <database folder>/logs/<command>.log.
+std::string DatabaseLogPath(const std::string& log_path,
+                            const std::string& database_path,
+                            const std::string& command);
 
 }  // namespace bayon

@@ -13,5 +13,6 @@ int RunEvaluate(int argc, char** argv);
 int RunFeatures(int argc, char** argv);
 int RunEdit(int argc, char** argv);
 int RunSynthCloud(int argc, char** argv);
+int RunMatch(int argc, char** argv);
 
 }  // namespace bayon

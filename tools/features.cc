@@ -5,10 +5,6 @@
 #include "tools/command.h"
 #include "tools/commands.h"
 
-#include <filesystem>
-
-namespace fs = std::filesystem;
-
 namespace bayon {
 
 int RunFeatures(int argc, char** argv) {
@@ -51,11 +47,7 @@ int RunFeatures(int argc, char** argv) {
   options.Check();
   CheckFileExists(database_path, "--database_path");
   CheckDirectoryExists(image_path, "--image_path");
-  if (log_path.empty()) {
-    log_path = WorkspaceLogPath(
-        fs::absolute(database_path).parent_path().string(), "features");
-  }
-  command.StartLog(log_path);
+  command.StartLog(DatabaseLogPath(log_path, database_path, "features"));
 
   const FeatureExtractionSummary summary =
       ExtractFeatures(database_path, image_path, options);

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/colmap/table_features.h"
 
+#include "ext/colmap/table_matches.h"
 #include "ext/core/errors.h"
 
-#include <algorithm>
 #include <cstring>
 
 namespace bayon {
@@ -108,22 +108,7 @@ int DeleteKeypointDependents(Database* database, image_t image_id) {
     statement.Bind(1, id);
     statement.Execute();
   }
-  std::vector<std::string> pair_tables;
-  {
-    SqliteStatement tables(connection,
-                           "SELECT name FROM sqlite_master WHERE type='table' "
-                           "AND name LIKE 'bayon\\_%' ESCAPE '\\'");
-    while (tables.Step()) {
-      const std::string name = tables.ColumnText(0);
-      const std::vector<std::string> columns = connection->TableColumns(name);
-      const auto has = [&](const char* column) {
-        return std::find(columns.begin(), columns.end(), column) !=
-               columns.end();
-      };
-      if (has("image_id1") && has("image_id2")) pair_tables.push_back(name);
-    }
-  }
-  for (const std::string& table : pair_tables) {
+  for (const std::string& table : BayonPairTables(database)) {
     SqliteStatement statement(
         connection,
         "DELETE FROM " + table + " WHERE image_id1 = ?1 OR image_id2 = ?1");

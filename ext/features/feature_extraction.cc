@@ -49,21 +49,9 @@ std::vector<Job> PlanJobs(Database* database,
   for (const Camera& camera : database->ReadAllCameras()) {
     cameras.emplace(camera.camera_id, camera);
   }
-  std::vector<std::string> missing;
+  std::vector<ExpectedImage> expected;
   std::vector<Job> jobs;
   for (const DatabaseImage& image : images) {
-    Job job;
-    job.image = image;
-    job.path = (fs::path(image_path) / image.name).string();
-    job.result.image_id = image.image_id;
-    job.result.name = image.name;
-    if (!fs::is_regular_file(job.path)) {
-      missing.push_back(image.name);
-      continue;
-    }
-    const ImageSize size = ReadImageSize(job.path);
-    job.result.width = size.width;
-    job.result.height = size.height;
     const auto camera = cameras.find(image.camera_id);
     if (camera == cameras.end()) {
       ThrowInputError(database->path(),
@@ -73,22 +61,14 @@ std::vector<Job> PlanJobs(Database* database,
                       image.camera_id,
                       ", which is not in the cameras table");
     }
-    if (camera->second.width != static_cast<uint64_t>(size.width) ||
-        camera->second.height != static_cast<uint64_t>(size.height)) {
-      ThrowInputError(job.path,
-                      ": ",
-                      size.width,
-                      "x",
-                      size.height,
-                      " pixels, but its camera ",
-                      image.camera_id,
-                      " in ",
-                      database->path(),
-                      " is ",
-                      camera->second.width,
-                      "x",
-                      camera->second.height);
-    }
+    Job job;
+    job.image = image;
+    job.path = (fs::path(image_path) / image.name).string();
+    job.result.image_id = image.image_id;
+    job.result.name = image.name;
+    job.result.width = static_cast<int>(camera->second.width);
+    job.result.height = static_cast<int>(camera->second.height);
+    expected.push_back({image.name, job.result.width, job.result.height});
     if (!options.overwrite && database->ExistsKeypoints(image.image_id) &&
         database->ReadKeypoints(image.image_id).rows() > 0) {
       job.result.skipped = true;
@@ -96,16 +76,7 @@ std::vector<Job> PlanJobs(Database* database,
     }
     jobs.push_back(std::move(job));
   }
-  if (!missing.empty()) {
-    ThrowInputError((fs::path(image_path) / missing.front()).string(),
-                    ": listed in ",
-                    database->path(),
-                    " but missing on disk (",
-                    missing.size(),
-                    " of ",
-                    images.size(),
-                    " images missing)");
-  }
+  CheckImagesOnDisk(image_path, expected, database->path());
   return jobs;
 }
 

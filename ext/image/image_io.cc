@@ -247,4 +247,42 @@ void WriteImage(const std::string& path,
   WriteFileAtomically(path, std::string(buffer.begin(), buffer.end()));
 }
 
+void CheckImagesOnDisk(const std::string& folder,
+                       const std::vector<ExpectedImage>& images,
+                       const std::string& source) {
+  std::vector<std::string> missing;
+  for (const ExpectedImage& image : images) {
+    const std::string path = (fs::path(folder) / image.name).string();
+    if (!fs::is_regular_file(path)) {
+      missing.push_back(path);
+      continue;
+    }
+    if (image.width <= 0 || image.height <= 0) continue;
+    const ImageSize size = ReadImageSize(path);
+    if (size.width != image.width || size.height != image.height) {
+      ThrowInputError(path,
+                      ": ",
+                      size.width,
+                      "x",
+                      size.height,
+                      " pixels, but its camera in ",
+                      source,
+                      " is ",
+                      image.width,
+                      "x",
+                      image.height);
+    }
+  }
+  if (!missing.empty()) {
+    ThrowInputError(missing.front(),
+                    ": listed in ",
+                    source,
+                    " but missing on disk (",
+                    missing.size(),
+                    " of ",
+                    images.size(),
+                    " images missing)");
+  }
+}
+
 }  // namespace bayon

@@ -49,6 +49,21 @@ struct ExifFocal {
   double focal_plane_x_res_per_mm =
       0;  // pixels per mm on the sensor, 0: absent
 };
+// An image a stage is about to read, with the size its camera claims.
+struct ExpectedImage {
+  std::string name;  // relative to the image folder
+  int width = 0;     // 0: any size
+  int height = 0;
+};
+
+// Checks, before any work, that every image is on disk under `folder` with
+// the expected size (from the file headers). Throws InputError naming the
+// first missing file (and how many are missing) or the first whose size
+// differs; `source` names where the list came from (e.g. the database).
+void CheckImagesOnDisk(const std::string& folder,
+                       const std::vector<ExpectedImage>& images,
+                       const std::string& source);
+
 // Reads the EXIF focal length tags; nullopt when the file has no EXIF.
 std::optional<ExifFocal> ReadExifFocal(const std::string& path);
 

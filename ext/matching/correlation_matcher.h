@@ -1,0 +1,137 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Matching one image pair by correlation and relaxation, the paper's steps
+// 3.2.1(b) and (c), with what a ring of hand-held or gantry photographs
+// adds to them:
+//
+// 1. Global mapping. A spread subset of image-1 points is correlated (on
+//    the wider coarse windows) with every point of image 2, in each of the
+//    four in-plane rotations by quarter turns; the mutually best pairs vote
+//    for a similarity transformation (RANSAC on two-point samples). The
+//    rotation with the most consistent votes wins, and an affine mapping
+//    fitted to its votes predicts where each point should be found. This is
+//    what makes cameras turned by 90 or 180 degrees (temple-ring) and large
+//    shifts between the images harmless. The paper's search (centred on
+//    the same position, upright) is always tried too, and used when it
+//    gives more conjugate points. Where the votes find no mapping, each
+//    quarter turn about the image centres is tried, and the one that leaves
+//    the most conjugate points after relaxation wins.
+// 2. Candidates. Every image-1 point is correlated (w x w windows, 7 x 7 by
+//    default) with the image-2 points inside a search window of 1/16 of the
+//    image (sqrt(1/16) of its width and height) around its predicted
+//    position; those with r >= 0.75 are candidates.
+// 3. Relaxation (relaxation.h): continuity and uniqueness, loser-takes-
+//    nothing.
+// 4. Sub-pixel conjugate points. The image-1 keypoint is the reference; the
+//    correlation peak of its window is searched within +-refine_radius
+//    pixels of the matched image-2 keypoint and located to sub-pixel
+//    precision by a parabola through the peak and its neighbours in x and
+//    y. Matches whose peak lies on the edge of that range (the keypoints
+//    are not the same feature) or below refine_min_ncc are dropped. The
+//    refined positions feed the relative orientation; COLMAP gets the
+//    keypoint indices.
+#pragma once
+
+#include "ext/colmap/database.h"
+#include "ext/matching/correlation_patches.h"
+#include "ext/matching/relaxation.h"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace bayon {
+
+struct CorrelationMatchingOptions {
+  // Correlation threshold r for candidates and conjugate points (paper).
+  double min_ncc = 0.75;
+  // Area of the search window as a fraction of the image (paper: 1/16).
+  double search_window_fraction = 1.0 / 16.0;
+  // Candidates kept per image-1 point (the best ones).
+  int max_candidates_per_point = 8;
+  // The sub-pixel peak on the wider refinement window must reach this (the
+  // match itself was accepted on the 7 x 7 window with min_ncc; the wider
+  // window is less similar between convergent views).
+  double refine_min_ncc = 0.5;
+
+  // Global mapping: try all four quarter turns (else upright only).
+  bool detect_rotation = true;
+  // Image-1 points used for it, spread over a grid.
+  int global_num_points = 200;
+  // Coarse correlation a vote needs, and how much better than the
+  // runner-up it must be: (1 - r_best) <= ratio * (1 - r_second).
+  double global_min_ncc = 0.7;
+  double global_max_ratio = 0.8;
+  // RANSAC inlier distance as a fraction of the image diagonal: loose,
+  // because a similarity only approximates two views of a 3D object.
+  double global_inlier_fraction = 0.05;
+  int global_min_inliers = 8;
+  // Largest chance that the winning model's inliers are a coincidence of
+  // random votes (a Poisson tail, times the number of trials).
+  double global_max_false_alarm = 1e-3;
+  int global_num_trials = 500;
+  unsigned int seed = 1;
+
+  RelaxationOptions relaxation;
+  void Check() const;
+};
+
+// The approximate mapping from image 1 to image 2.
+struct GlobalMapping {
+  bool found = false;
+  int quarter_turns = 0;  // image 2 is turned by 90 * quarter_turns degrees
+  // pixel2 ~= affine * (pixel1, 1).
+  Eigen::Matrix<double, 2, 3> affine =
+      (Eigen::Matrix<double, 2, 3>() << 1, 0, 0, 0, 1, 0).finished();
+  int num_votes = 0;    // tentative pairs for the winning rotation
+  int num_inliers = 0;  // consistent with its similarity
+  std::array<int, 4> inliers_per_rotation = {0, 0, 0, 0};
+  int RotationDeg() const { return 90 * quarter_turns; }
+};
+
+struct PairMatches {
+  GlobalMapping mapping;   // the mapping the matches were found with
+  int num_candidates = 0;  // candidate pairs with r >= min_ncc
+  int num_relaxed = 0;     // one-to-one after relaxation
+  int num_iterations = 0;  // relaxation rounds
+  // Conjugate points: keypoint indices; the reference point in image 1 (the
+  // centre of the keypoint's pixel) and the sub-pixel position of its
+  // conjugate in image 2, with their correlation.
+  FeatureMatches matches;
+  std::vector<Eigen::Vector2d> reference_xy1;
+  std::vector<Eigen::Vector2d> refined_xy2;
+  std::vector<float> ncc;
+};
+
+GlobalMapping EstimateGlobalMapping(const ImagePatches& image1,
+                                    const ImagePatches& image2,
+                                    const CorrelationMatchingOptions& options);
+
+// Candidate pairs for every valid image-1 point, around the predicted
+// position of `mapping`.
+std::vector<MatchCandidate> FindCandidates(
+    const ImagePatches& image1,
+    const ImagePatches& image2,
+    const GlobalMapping& mapping,
+    const CorrelationMatchingOptions& options);
+
+// The sub-pixel conjugate in image 2 of keypoint idx1 of image 1 near
+// keypoint idx2 (step 4 above). False if the peak is on the edge of the
+// search range or below min_ncc.
+bool RefineConjugatePoint(const ImagePatches& image1,
+                          int idx1,
+                          const ImagePatches& image2,
+                          int idx2,
+                          int quarter_turns,
+                          double min_ncc,
+                          Eigen::Vector2d* xy2,
+                          float* ncc);
+
+// Steps 1-4 for one pair.
+PairMatches MatchImagePatches(const ImagePatches& image1,
+                              const ImagePatches& image2,
+                              const CorrelationMatchingOptions& options);
+
+}  // namespace bayon

@@ -1,0 +1,137 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/matching/pair_selection.h"
+
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace bayon {
+
+std::optional<PairingMode> PairingModeFromName(const std::string& name) {
+  if (name == "ring") return PairingMode::kRing;
+  if (name == "sequential") return PairingMode::kSequential;
+  if (name == "exhaustive") return PairingMode::kExhaustive;
+  if (name == "list") return PairingMode::kList;
+  return std::nullopt;
+}
+
+const char* PairingModeName(PairingMode mode) {
+  switch (mode) {
+    case PairingMode::kRing:
+      return "ring";
+    case PairingMode::kSequential:
+      return "sequential";
+    case PairingMode::kExhaustive:
+      return "exhaustive";
+    case PairingMode::kList:
+      return "list";
+  }
+  return "?";
+}
+
+void PairingOptions::Check() const {
+  CheckOption(num_neighbors >= 1,
+              "PairingOptions.num_neighbors",
+              ">= 1",
+              num_neighbors);
+  if (mode == PairingMode::kList && pair_list_path.empty()) {
+    ThrowInputError("--pairing list needs --pair_list_path");
+  }
+}
+
+namespace {
+
+std::vector<std::pair<image_t, image_t>> ReadPairList(
+    const std::string& path, const std::vector<DatabaseImage>& images) {
+  std::map<std::string, image_t> ids;
+  for (const DatabaseImage& image : images) ids[image.name] = image.image_id;
+  std::istringstream lines(ReadFileToString(path));
+  std::string line;
+  std::vector<std::pair<image_t, image_t>> pairs;
+  int line_number = 0;
+  while (std::getline(lines, line)) {
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream fields(line);
+    std::string name1, name2, extra;
+    if (!(fields >> name1 >> name2) || (fields >> extra)) {
+      ThrowInputError(path,
+                      ":",
+                      line_number,
+                      ": expected two image names, got '",
+                      line,
+                      "'");
+    }
+    for (const std::string& name : {name1, name2}) {
+      if (!ids.count(name)) {
+        ThrowInputError(path,
+                        ":",
+                        line_number,
+                        ": image '",
+                        name,
+                        "' is not in the database");
+      }
+    }
+    if (name1 == name2) {
+      ThrowInputError(
+          path, ":", line_number, ": pairs image '", name1, "' with itself");
+    }
+    pairs.emplace_back(ids[name1], ids[name2]);
+  }
+  return pairs;
+}
+
+}  // namespace
+
+std::vector<std::pair<image_t, image_t>> SelectImagePairs(
+    const std::vector<DatabaseImage>& images, const PairingOptions& options) {
+  options.Check();
+  std::vector<DatabaseImage> sorted = images;
+  std::sort(sorted.begin(),
+            sorted.end(),
+            [](const DatabaseImage& a, const DatabaseImage& b) {
+              return a.name < b.name;
+            });
+  const int n = static_cast<int>(sorted.size());
+  std::vector<std::pair<image_t, image_t>> raw;
+  switch (options.mode) {
+    case PairingMode::kRing:
+    case PairingMode::kSequential:
+      for (int i = 0; i < n; ++i) {
+        for (int d = 1; d <= options.num_neighbors; ++d) {
+          int j = i + d;
+          if (j >= n) {
+            if (options.mode == PairingMode::kSequential) break;
+            j %= n;
+          }
+          if (j != i) raw.emplace_back(sorted[i].image_id, sorted[j].image_id);
+        }
+      }
+      break;
+    case PairingMode::kExhaustive:
+      for (int i = 0; i < n; ++i) {
+        for (int j = i + 1; j < n; ++j) {
+          raw.emplace_back(sorted[i].image_id, sorted[j].image_id);
+        }
+      }
+      break;
+    case PairingMode::kList:
+      raw = ReadPairList(options.pair_list_path, sorted);
+      break;
+  }
+  std::set<std::pair<image_t, image_t>> seen;
+  std::vector<std::pair<image_t, image_t>> pairs;
+  for (auto [a, b] : raw) {
+    if (a > b) std::swap(a, b);
+    if (seen.insert({a, b}).second) pairs.emplace_back(a, b);
+  }
+  return pairs;
+}
+
+}  // namespace bayon
