@@ -47,7 +47,10 @@ SyntheticTruth SynthesizePointsScene(const PointsSceneOptions& options) {
     std::snprintf(name, sizeof(name), "view_%03d.png", i + 1);
     image.name = name;
     image.camera_id = camera.camera_id;
-    image.cam_from_world = LookAt(center, target);
+    const double roll_rad =
+        (i % 2 == 1) ? options.alternate_roll_deg * M_PI / 180.0 : 0.0;
+    image.cam_from_world =
+        LookAt(center, target, Eigen::Vector3d::UnitZ(), roll_rad);
     scene.images.Set(image.image_id, image);
   }
 
@@ -104,6 +107,7 @@ SyntheticTruth SynthesizePointsScene(const PointsSceneOptions& options) {
   description["num_points"] = options.num_points;
   description["ring_radius_m"] = options.ring_radius_m;
   description["camera_height_m"] = options.camera_height_m;
+  description["alternate_roll_deg"] = options.alternate_roll_deg;
   description["object_radius_m"] = options.object_radius_m;
   description["object_height_m"] = options.object_height_m;
   description["max_view_angle_deg"] = options.max_view_angle_deg;

@@ -14,6 +14,10 @@ struct PointsSceneOptions {
   // Cameras on a horizontal circle around the object, looking at its middle.
   double ring_radius_m = 10.0;
   double camera_height_m = 2.0;
+  // Every other station turned by this angle about its viewing direction
+  // (portrait and landscape shots), which self-calibration needs to separate
+  // the principal point and affinity from the exterior orientation.
+  double alternate_roll_deg = 0.0;
   // Points fill a vertical cylinder of this radius and height (z up).
   double object_radius_m = 2.0;
   double object_height_m = 4.0;

@@ -1,0 +1,396 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/adjustment/adjustment.h"
+
+#include "ext/colmap/calibration_json.h"
+#include "ext/core/alignment.h"
+#include "ext/core/errors.h"
+#include "ext/core/progress.h"
+
+#include <glog/logging.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace bayon {
+namespace {
+
+// Observations whose point lies behind the camera cannot be projected; they
+// leave the block before the first solution.
+int DeactivateObservationsBehindCameras(AdjustmentBlock* block) {
+  int count = 0;
+  for (BlockObservation& observation : block->observations) {
+    if (!observation.active) continue;
+    const BlockImage& image = block->images[observation.image_idx];
+    const Eigen::Vector3d in_cam =
+        image.CamFromWorld() * block->points[observation.point_idx].xyz;
+    if (in_cam.z() <= 0) {
+      observation.active = false;
+      ++count;
+    }
+  }
+  return count;
+}
+
+std::vector<std::vector<int>> ResolveCandidates(
+    const AdjustmentOptions& options, const AdjustmentBlock& block) {
+  std::vector<std::vector<int>> candidates(block.cameras.size());
+  if (options.self_calibration == SelfCalibration::kNone) return candidates;
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    const CameraModelId model = block.cameras[c].camera.model_id;
+    if (options.self_calibration != SelfCalibration::kList) {
+      candidates[c] = CandidateParameters(model);
+      continue;
+    }
+    const std::vector<std::string> names = ParameterNames(model);
+    for (const std::string& wanted : options.parameter_list) {
+      const auto it = std::find(names.begin(), names.end(), wanted);
+      if (it == names.end()) {
+        std::string known;
+        for (int idx : CandidateParameters(model)) {
+          known += (known.empty() ? "" : ", ") + names[idx];
+        }
+        ThrowInputError("--self_calibration: '",
+                        wanted,
+                        "' is not a parameter of the ",
+                        CameraModelInfoFor(model).name,
+                        " camera (",
+                        known,
+                        ")");
+      }
+      const int idx = static_cast<int>(it - names.begin());
+      if (model == CameraModelId::kBrownBeyer &&
+          idx < brown::kFirstAdditional) {
+        ThrowInputError("--self_calibration: ",
+                        wanted,
+                        " is a nominal value; estimate its correction d",
+                        wanted,
+                        " instead");
+      }
+      candidates[c].push_back(idx);
+    }
+  }
+  return candidates;
+}
+
+class Adjuster {
+ public:
+  Adjuster(const AdjustmentOptions& options, AdjustmentBlock* block)
+      : options_(options), block_(block) {}
+
+  AdjustmentResult Run() {
+    Timer timer;
+    for (const BlockCamera& camera : block_->cameras) {
+      initial_params_.push_back(camera.camera.params);
+    }
+    for (const BlockPoint& point : block_->points) {
+      initial_xyz_.push_back(point.xyz);
+    }
+    const int behind = DeactivateObservationsBehindCameras(block_);
+    if (behind > 0) {
+      LOG(WARNING) << behind
+                   << " observations of points behind their camera left out";
+    }
+    result_.num_points_removed += block_->DeactivateWeakPoints();
+    candidates_ = ResolveCandidates(options_, *block_);
+    for (size_t c = 0; c < candidates_.size(); ++c) {
+      const std::vector<std::string> names =
+          ParameterNames(block_->cameras[c].camera.model_id);
+      for (int idx : candidates_[c]) {
+        result_.candidate_parameters.push_back(names[idx]);
+      }
+    }
+    const bool robust = options_.blunder_detection == BlunderDetection::kRobust;
+    const bool self_calibrate =
+        options_.self_calibration != SelfCalibration::kNone;
+
+    SetCameraParametersFree(false);
+    if (options_.two_steps || !self_calibrate) {
+      Solve("step 1: without self-calibration", robust);
+    }
+    if (self_calibrate) {
+      SetCameraParametersFree(true);
+      Solve("step 2: with self-calibration", robust);
+    }
+    if (options_.blunder_detection != BlunderDetection::kNone) {
+      Snoop();
+    } else if (robust) {
+      Solve("final solution", false);
+    }
+    if (options_.self_calibration == SelfCalibration::kSignificant) {
+      SelectSignificantParameters();
+    }
+    if (options_.inner_constraints) TransformToInnerConstraintDatum();
+    PrecisionOptions precision_options;
+    precision_options.inner_constraints = options_.inner_constraints;
+    result_.precision = ComputePrecision(block_, precision_options);
+    CollectParameters();
+    result_.total_time_s = timer.Seconds();
+    return std::move(result_);
+  }
+
+ private:
+  void SetCameraParametersFree(bool free) {
+    for (size_t c = 0; c < block_->cameras.size(); ++c) {
+      BlockCamera& camera = block_->cameras[c];
+      std::fill(camera.free.begin(), camera.free.end(), false);
+      if (!free) continue;
+      for (int idx : candidates_[c]) camera.free[idx] = true;
+    }
+  }
+
+  void Solve(const std::string& name, bool robust) {
+    BundleSolverOptions solver = options_.solver;
+    if (robust) {
+      solver.loss = RobustLoss::kHuber;
+      solver.loss_scale = options_.robust_loss_scale;
+    }
+    const BundleSolverSummary summary = SolveBundle(solver, block_);
+    if (!summary.usable) {
+      throw RunFailure(
+          StrCat(name, ": the adjustment failed: ", summary.message));
+    }
+    AdjustmentStep step;
+    step.name = name;
+    step.num_iterations = summary.num_iterations;
+    step.time_s = summary.time_s;
+    step.message = summary.message;
+    LOG(INFO) << name << ": " << summary.num_iterations << " iterations, "
+              << summary.time_s << " s, cost " << summary.initial_cost << " -> "
+              << summary.final_cost;
+    result_.steps.push_back(step);
+  }
+
+  void RecordSigma0(double sigma0) {
+    if (!result_.steps.empty()) result_.steps.back().sigma0 = sigma0;
+  }
+
+  // Baarda's data snooping, iterated: in each round the observation with the
+  // largest normalised residual above the critical value is rejected in
+  // every point that has one (rejecting only the worst of a point keeps a
+  // blunder from taking its good neighbours in the same track along).
+  void Snoop() {
+    PrecisionOptions precision_options;
+    precision_options.compute_residual_cofactors = true;
+    for (int iteration = 1; iteration <= options_.max_snooping_iterations;
+         ++iteration) {
+      Solve(StrCat("data snooping ", iteration), false);
+      const AdjustmentPrecision precision =
+          ComputePrecision(block_, precision_options);
+      RecordSigma0(precision.sigma0);
+      result_.num_snooping_iterations = iteration;
+      std::map<int, RejectedObservation> worst_per_point;
+      for (size_t o = 0; o < block_->observations.size(); ++o) {
+        const ObservationStatistics& stats = precision.observations[o];
+        if (!stats.valid) continue;
+        const double w = stats.normalized.cwiseAbs().maxCoeff();
+        if (w <= options_.snooping_critical_value) continue;
+        const int point = block_->observations[o].point_idx;
+        auto it = worst_per_point.find(point);
+        if (it != worst_per_point.end() && it->second.w >= w) continue;
+        RejectedObservation rejected;
+        rejected.observation_idx = static_cast<int>(o);
+        rejected.residual_px = stats.residual_px;
+        rejected.w = w;
+        rejected.redundancy = stats.redundancy.minCoeff();
+        rejected.iteration = iteration;
+        worst_per_point[point] = rejected;
+      }
+      if (worst_per_point.empty()) return;
+      for (const auto& [point, rejected] : worst_per_point) {
+        block_->observations[rejected.observation_idx].active = false;
+        result_.rejected.push_back(rejected);
+      }
+      result_.num_points_removed += block_->DeactivateWeakPoints();
+      LOG(INFO) << "data snooping " << iteration << ": sigma0 "
+                << precision.sigma0 << " px, " << worst_per_point.size()
+                << " observations rejected";
+    }
+    Solve("data snooping: last solution", false);
+    LOG(WARNING) << "data snooping stopped after "
+                 << options_.max_snooping_iterations << " iterations";
+  }
+
+  // Stepwise removal of the least significant additional parameter.
+  void SelectSignificantParameters() {
+    PrecisionOptions precision_options;
+    precision_options.compute_residual_cofactors = false;
+    while (true) {
+      const AdjustmentPrecision precision =
+          ComputePrecision(block_, precision_options);
+      RecordSigma0(precision.sigma0);
+      ParameterEstimate weakest;
+      weakest.t_value = std::numeric_limits<double>::infinity();
+      for (size_t c = 0; c < block_->cameras.size(); ++c) {
+        const BlockCamera& camera = block_->cameras[c];
+        const std::vector<std::string> names =
+            ParameterNames(camera.camera.model_id);
+        for (int idx : candidates_[c]) {
+          if (!camera.free[idx] || HigherRadialTermFree(camera, idx)) continue;
+          const ParameterEstimate estimate =
+              Estimate(precision, static_cast<int>(c), idx, names[idx]);
+          if (estimate.t_value < weakest.t_value) weakest = estimate;
+        }
+      }
+      if (weakest.camera_idx < 0 ||
+          weakest.t_value >= options_.significance_t) {
+        return;
+      }
+      BlockCamera& camera = block_->cameras[weakest.camera_idx];
+      camera.free[weakest.param_idx] = false;
+      camera.camera.params[weakest.param_idx] =
+          initial_params_[weakest.camera_idx][weakest.param_idx];
+      RemovedParameter removed;
+      removed.estimate = weakest;
+      removed.reason =
+          StrCat("t = ", weakest.t_value, " < ", options_.significance_t);
+      result_.removed_parameters.push_back(removed);
+      LOG(INFO) << "self-calibration: " << weakest.name << " not significant ("
+                << removed.reason << "), removed";
+      Solve(StrCat("without ", weakest.name), false);
+    }
+  }
+
+  // Radial distortion is a polynomial: a term is tested (and can be
+  // removed) only when no higher-order term is still estimated, so that the
+  // strongly correlated K1, K2, K3 do not take each other's place.
+  static bool HigherRadialTermFree(const BlockCamera& camera, int idx) {
+    if (camera.camera.model_id != CameraModelId::kBrownBeyer) return false;
+    if (idx < brown::kK1 || idx > brown::kK3) return false;
+    for (int higher = idx + 1; higher <= brown::kK3; ++higher) {
+      if (camera.free[higher]) return true;
+    }
+    return false;
+  }
+
+  ParameterEstimate Estimate(const AdjustmentPrecision& precision,
+                             int camera_idx,
+                             int param_idx,
+                             const std::string& name) const {
+    ParameterEstimate estimate;
+    estimate.camera_idx = camera_idx;
+    estimate.param_idx = param_idx;
+    estimate.name = name;
+    estimate.value = block_->cameras[camera_idx].camera.params[param_idx];
+    const double variance =
+        precision.camera_covariance[camera_idx](param_idx, param_idx);
+    estimate.std_dev = std::sqrt(std::max(variance, 0.0));
+    estimate.t_value = estimate.std_dev > 0
+                           ? std::abs(estimate.value) / estimate.std_dev
+                           : std::numeric_limits<double>::infinity();
+    return estimate;
+  }
+
+  // The solution moved into the datum of inner constraints over the tie
+  // points: the similarity that brings the adjusted tie points closest to
+  // their input coordinates (the linearised condition G^T dx = 0).
+  void TransformToInnerConstraintDatum() {
+    std::vector<Eigen::Vector3d> adjusted, reference;
+    for (size_t p = 0; p < block_->points.size(); ++p) {
+      const BlockPoint& point = block_->points[p];
+      if (!point.active || point.kind != PointKind::kTie) continue;
+      adjusted.push_back(point.xyz);
+      reference.push_back(initial_xyz_[p]);
+    }
+    const std::optional<Sim3d> transform = EstimateSim3d(adjusted, reference);
+    if (!transform) throw RunFailure("free network: too few tie points left");
+    for (BlockPoint& point : block_->points) point.xyz = *transform * point.xyz;
+    for (BlockImage& image : block_->images) {
+      image.SetCamFromWorld(transform->TransformPose(image.CamFromWorld()));
+    }
+  }
+
+  void CollectParameters() {
+    const AdjustmentPrecision& precision = result_.precision;
+    result_.parameter_correlations.resize(block_->cameras.size());
+    for (size_t c = 0; c < block_->cameras.size(); ++c) {
+      const BlockCamera& camera = block_->cameras[c];
+      const std::vector<std::string> names =
+          ParameterNames(camera.camera.model_id);
+      std::vector<int> free_idxs;
+      for (size_t idx = 0; idx < camera.free.size(); ++idx) {
+        if (!camera.free[idx]) continue;
+        free_idxs.push_back(static_cast<int>(idx));
+        result_.final_parameters.push_back(
+            Estimate(precision, static_cast<int>(c), idx, names[idx]));
+      }
+      const Eigen::MatrixXd correlation =
+          CorrelationFromCovariance(precision.camera_covariance[c]);
+      Eigen::MatrixXd selected(free_idxs.size(), free_idxs.size());
+      for (size_t a = 0; a < free_idxs.size(); ++a) {
+        for (size_t b = 0; b < free_idxs.size(); ++b) {
+          selected(a, b) = correlation(free_idxs[a], free_idxs[b]);
+          if (b > a && std::abs(selected(a, b)) > options_.max_correlation) {
+            result_.correlation_flags.push_back({static_cast<int>(c),
+                                                 names[free_idxs[a]],
+                                                 names[free_idxs[b]],
+                                                 selected(a, b)});
+          }
+        }
+      }
+      result_.parameter_correlations[c] = selected;
+    }
+    RecordSigma0(precision.sigma0);
+  }
+
+  const AdjustmentOptions& options_;
+  AdjustmentBlock* block_;
+  AdjustmentResult result_;
+  std::vector<std::vector<double>> initial_params_;
+  std::vector<Eigen::Vector3d> initial_xyz_;
+  std::vector<std::vector<int>> candidates_;
+};
+
+}  // namespace
+
+void AdjustmentOptions::Check() const {
+  CheckOption(significance_t > 0,
+              "AdjustmentOptions.significance_t",
+              "> 0",
+              significance_t);
+  CheckOption(max_correlation > 0 && max_correlation <= 1,
+              "AdjustmentOptions.max_correlation",
+              "in (0, 1]",
+              max_correlation);
+  CheckOption(snooping_critical_value > 0,
+              "AdjustmentOptions.snooping_critical_value",
+              "> 0",
+              snooping_critical_value);
+  CheckOption(max_snooping_iterations >= 1,
+              "AdjustmentOptions.max_snooping_iterations",
+              ">= 1",
+              max_snooping_iterations);
+  CheckOption(robust_loss_scale > 0,
+              "AdjustmentOptions.robust_loss_scale",
+              "> 0",
+              robust_loss_scale);
+  if (self_calibration == SelfCalibration::kList && parameter_list.empty()) {
+    ThrowInputError(
+        "AdjustmentOptions.parameter_list must name at least one parameter "
+        "for self-calibration 'list'");
+  }
+  solver.Check();
+}
+
+std::vector<int> CandidateParameters(CameraModelId model) {
+  std::vector<int> idxs;
+  if (model == CameraModelId::kBrownBeyer) {
+    for (int idx = brown::kFirstAdditional; idx < brown::kNumParams; ++idx) {
+      idxs.push_back(idx);
+    }
+    return idxs;
+  }
+  const CameraModelInfo& info = CameraModelInfoFor(model);
+  for (int idx : info.focal_idxs) idxs.push_back(idx);
+  const int first_extra = static_cast<int>(info.focal_idxs.size()) + 2;
+  for (int idx = first_extra; idx < info.num_params; ++idx) idxs.push_back(idx);
+  return idxs;
+}
+
+AdjustmentResult RunAdjustment(const AdjustmentOptions& options,
+                               AdjustmentBlock* block) {
+  options.Check();
+  return Adjuster(options, block).Run();
+}
+
+}  // namespace bayon

@@ -1,0 +1,188 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/adjustment/adjustment.h"
+
+#include "ext/synth/points_scene.h"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace bayon {
+namespace {
+
+struct TestBlock {
+  SyntheticTruth truth;
+  AdjustmentBlock block;
+  std::vector<Eigen::Vector3d> true_xyz;  // per block point
+  std::vector<Eigen::Vector3d> true_centers;
+};
+
+// A ring of 12 stations around 400 points, 0.3 px noise, the nominal camera
+// (additional parameters zero) and perturbed approximations. Every 40th
+// point is a fixed control point, every 40th + 20 a check point.
+TestBlock MakeBlock(unsigned seed,
+                    bool with_control = true,
+                    double noise_px = 0.3) {
+  TestBlock test;
+  PointsSceneOptions options;
+  options.num_views = 16;
+  options.num_points = 1200;
+  options.ring_radius_m = 6.0;
+  options.max_view_angle_deg = 75;
+  options.alternate_roll_deg = 90;
+  options.keypoint_noise_px = noise_px;
+  options.seed = seed;
+  test.truth = SynthesizePointsScene(options);
+  test.block = BlockFromScene(test.truth.noisy_scene, noise_px);
+  AdjustmentBlock& block = test.block;
+  Camera& camera = block.cameras[0].camera;
+  for (int idx = brown::kFirstAdditional; idx < brown::kNumParams; ++idx) {
+    camera.params[idx] = 0;
+  }
+  std::mt19937 rng(seed + 100);
+  std::normal_distribution<double> noise(0, 1);
+  for (BlockPoint& point : block.points) {
+    test.true_xyz.push_back(point.xyz);
+    point.xyz += 0.02 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  }
+  for (BlockImage& image : block.images) {
+    test.true_centers.push_back(image.center);
+    image.center += 0.05 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  }
+  if (with_control) {
+    for (size_t p = 0; p < block.points.size(); ++p) {
+      BlockPoint& point = block.points[p];
+      if (p % 100 == 0) {
+        point.kind = PointKind::kControl;
+        point.given_xyz = test.true_xyz[p];
+        point.xyz = point.given_xyz;
+        point.fixed = {true, true, true};
+      } else if (p % 100 == 50) {
+        point.kind = PointKind::kCheck;
+        point.given_xyz = test.true_xyz[p];
+      }
+    }
+  }
+  return test;
+}
+
+// Over several seeds (the figures are statistics, so the test is too): the
+// adjusted block is consistent with the truth it was made from.
+TEST(Adjustment, SelfCalibrationWithControlIsConsistentWithTruth) {
+  int num_estimates = 0, num_within = 0, num_k3_dropped = 0;
+  std::vector<double> abs_z;
+  int num_coordinates = 0, num_coordinates_within = 0;
+  const std::vector<unsigned> seeds = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
+  for (unsigned seed : seeds) {
+    SCOPED_TRACE(seed);
+    TestBlock test = MakeBlock(seed);
+    AdjustmentOptions options;
+    options.blunder_detection = BlunderDetection::kNone;
+    options.solver.num_threads = 1;
+    const AdjustmentResult result = RunAdjustment(options, &test.block);
+    const AdjustmentPrecision& precision = result.precision;
+    // sigma0 within 10 % of the injected noise.
+    EXPECT_NEAR(precision.sigma0, 0.3, 0.03);
+    // Additional parameters: (estimate - truth) / std_dev.
+    const Camera& truth = test.truth.scene.cameras.at(1);
+    bool k3_kept = false;
+    for (const ParameterEstimate& estimate : result.final_parameters) {
+      const double z = (estimate.value - truth.params[estimate.param_idx]) /
+                       estimate.std_dev;
+      abs_z.push_back(std::abs(z));
+      ++num_estimates;
+      num_within += std::abs(z) < 2.5;
+      if (estimate.param_idx == brown::kK3) k3_kept = true;
+    }
+    num_k3_dropped += !k3_kept;
+    // Camera centres and check points, coordinate by coordinate.
+    auto count = [&](const Eigen::Vector3d& error, const Eigen::Matrix3d& C) {
+      for (int k = 0; k < 3; ++k) {
+        ++num_coordinates;
+        num_coordinates_within += std::abs(error(k)) < 3 * std::sqrt(C(k, k));
+      }
+    };
+    for (size_t i = 0; i < test.block.images.size(); ++i) {
+      count(test.block.images[i].center - test.true_centers[i],
+            precision.image_covariance[i].bottomRightCorner<3, 3>());
+    }
+    for (size_t p = 0; p < test.block.points.size(); ++p) {
+      const BlockPoint& point = test.block.points[p];
+      if (point.kind != PointKind::kCheck) continue;
+      count(point.xyz - point.given_xyz, precision.point_covariance[p]);
+    }
+  }
+  std::nth_element(
+      abs_z.begin(), abs_z.begin() + abs_z.size() / 2, abs_z.end());
+  const double median_z = abs_z[abs_z.size() / 2];
+  std::printf(
+      "%d of %d parameter estimates within 2.5 sigma of the truth "
+      "(median |z| %.2f); K3 dropped in %d of %zu blocks; %d of %d "
+      "centre and check point coordinates within 3 sigma\n",
+      num_within,
+      num_estimates,
+      median_z,
+      num_k3_dropped,
+      seeds.size(),
+      num_coordinates_within,
+      num_coordinates);
+  // Expected for a consistent estimate: 98.8 % within 2.5 sigma, a median
+  // |z| of 0.67, 99.7 % within 3 sigma; K3 kept by chance in about 5 % of
+  // blocks (the t-test at 2.0): 3 or more of 10 has a probability of 1 %.
+  EXPECT_GE(num_within, 0.9 * num_estimates);
+  EXPECT_GT(median_z, 0.4);
+  EXPECT_LT(median_z, 1.0);
+  EXPECT_GE(num_k3_dropped, static_cast<int>(seeds.size()) - 2);
+  EXPECT_GE(num_coordinates_within, 0.97 * num_coordinates);
+}
+
+TEST(Adjustment, DataSnoopingFindsBlunders) {
+  TestBlock test = MakeBlock(7);
+  AdjustmentBlock& block = test.block;
+  // 3 % of the observations get blunders of 3 to 30 px in a random
+  // direction.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  std::vector<bool> blunder(block.observations.size(), false);
+  int num_blunders = 0;
+  for (size_t o = 0; o < block.observations.size(); ++o) {
+    if (block.points[block.observations[o].point_idx].kind != PointKind::kTie ||
+        uniform(rng) >= 0.03) {
+      continue;
+    }
+    const double size = 3 + 27 * uniform(rng);
+    const double angle = 2 * M_PI * uniform(rng);
+    block.observations[o].xy +=
+        size * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    blunder[o] = true;
+    ++num_blunders;
+  }
+  AdjustmentOptions options;
+  options.solver.num_threads = 1;
+  const AdjustmentResult result = RunAdjustment(options, &block);
+  int found = 0, good_rejected = 0, good = 0;
+  for (size_t o = 0; o < block.observations.size(); ++o) {
+    if (blunder[o]) {
+      found += !block.observations[o].active;
+    } else {
+      ++good;
+      good_rejected += !block.observations[o].active;
+    }
+  }
+  std::printf(
+      "%d blunders, %d found; %d of %d good observations rejected; "
+      "sigma0 %.4f px\n",
+      num_blunders,
+      found,
+      good_rejected,
+      good,
+      result.precision.sigma0);
+  EXPECT_GE(found, 0.95 * num_blunders);
+  EXPECT_LE(good_rejected, 0.005 * good);
+  EXPECT_NEAR(result.precision.sigma0, 0.3, 0.03);
+}
+
+}  // namespace
+}  // namespace bayon
