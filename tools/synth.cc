@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/core/errors.h"
+#include "ext/synth/control_scene.h"
 #include "ext/synth/points_scene.h"
 #include "ext/synth/workspace_writer.h"
 #include "tools/command.h"
@@ -12,6 +13,8 @@ int RunSynth(int argc, char** argv) {
   std::string output_path;
   bool overwrite = false;
   PointsSceneOptions points;
+  SyntheticControlOptions control;
+  bool nominal_calibration = false;
   CommandLine command("synth",
                       "Write a synthetic workspace with known truth: the true "
                       "cameras, calibration and points in gt/, and a COLMAP "
@@ -35,11 +38,37 @@ int RunSynth(int argc, char** argv) {
   app.add_option("--distortion",
                  points.camera.distortion,
                  "1: a real lens (all additional parameters non-zero)");
+  app.add_option("--alternate_roll_deg",
+                 points.alternate_roll_deg,
+                 "points scene: every other station turned about its axis");
+  app.add_option("--max_view_angle_deg",
+                 points.max_view_angle_deg,
+                 "points scene: a point is seen within this angle of its "
+                 "normal");
+  app.add_option("--num_control_points",
+                 control.num_control_points,
+                 "control/: control points around the object");
+  app.add_option(
+      "--num_check_points", control.num_check_points, "control/: check points");
+  app.add_option("--levelling_bar",
+                 control.levelling_bar,
+                 "control/: a vertical levelling bar (minimum datum)");
+  app.add_option("--control_sigma_m",
+                 control.control_sigma_m,
+                 "control/: standard deviation of the control coordinates "
+                 "(0: fixed)");
+  app.add_option("--nominal_calibration",
+                 nominal_calibration,
+                 "1: the database gets the nominal camera (additional "
+                 "parameters zero), the truth stays in gt/");
   if (!command.Parse(argc, argv)) return 0;
 
   const SyntheticTruth truth = SynthesizePointsScene(points);
+  SyntheticWorkspaceExtras extras;
+  extras.control = SynthesizeControl(truth, points, control);
+  extras.nominal_calibration = nominal_calibration;
   const SyntheticWorkspaceSummary summary =
-      WriteSyntheticWorkspace(truth, output_path, overwrite);
+      WriteSyntheticWorkspace(truth, output_path, overwrite, extras);
   command.PrintSummary(StrCat(scene_name,
                               ": ",
                               summary.num_images,
@@ -51,7 +80,11 @@ int RunSynth(int argc, char** argv) {
                               summary.num_pairs,
                               " image pairs; COLMAP camera fit RMS ",
                               summary.colmap_fit_rms_px,
-                              " px -> ",
+                              " px; ",
+                              extras.control.points.size(),
+                              " control/check points with ",
+                              extras.control.measurements.size(),
+                              " image measurements -> ",
                               output_path));
   return 0;
 }

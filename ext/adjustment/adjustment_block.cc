@@ -136,7 +136,10 @@ std::vector<ResidualTerm> BuildResidualTerms(AdjustmentBlock* block) {
     if (!point.active || !point.weighted) continue;
     Eigen::Matrix3d sqrt_information = Eigen::Matrix3d::Zero();
     for (int k = 0; k < 3; ++k) {
-      sqrt_information(k, k) = block->sigma0_px / point.given_sigma(k);
+      // A coordinate held fixed is no observation (weight zero).
+      if (!point.fixed[k]) {
+        sqrt_information(k, k) = block->sigma0_px / point.given_sigma(k);
+      }
     }
     ResidualTerm term;
     term.type = TermType::kPointPrior;

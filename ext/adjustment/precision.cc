@@ -342,7 +342,13 @@ class PrecisionComputer {
     int n = 0, n_image = 0;
     double vtpv = 0;
     for (size_t t = 0; t < terms_.size(); ++t) {
-      n += terms_[t].num_residuals();
+      if (terms_[t].type == TermType::kPointPrior) {
+        // Coordinates held fixed carry no weight in a partly weighted point.
+        const BlockPoint& point = block_->points[terms_[t].index];
+        for (int k = 0; k < 3; ++k) n += !point.fixed[k];
+      } else {
+        n += terms_[t].num_residuals();
+      }
       if (terms_[t].type == TermType::kReprojection) {
         n_image += terms_[t].num_residuals();
       }
@@ -644,6 +650,9 @@ class PrecisionComputer {
         const BlockPoint& point = block_->points[term.index];
         result_.control_residual[term.index] = point.xyz - point.given_xyz;
         result_.control_redundancy[term.index] = redundancy;
+        for (int k = 0; k < 3; ++k) {
+          if (point.fixed[k]) result_.control_redundancy[term.index](k) = 0;
+        }
       } else {
         const BlockDistance& distance = block_->distances[term.index];
         result_.distance_residual[term.index] =

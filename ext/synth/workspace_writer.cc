@@ -15,17 +15,39 @@ namespace fs = std::filesystem;
 
 namespace bayon {
 
-SyntheticWorkspaceSummary WriteSyntheticWorkspace(const SyntheticTruth& truth,
-                                                  const std::string& workspace,
-                                                  bool overwrite) {
+namespace {
+
+// The camera as a user knows it before calibration: nominal camera constant
+// and principal point, additional parameters zero.
+Scene WithNominalCameras(const Scene& scene) {
+  Scene nominal = scene;
+  for (auto& [camera_id, camera] : nominal.cameras) {
+    if (camera.model_id != CameraModelId::kBrownBeyer) continue;
+    for (int idx = brown::kFirstAdditional; idx < brown::kNumParams; ++idx) {
+      camera.params[idx] = 0;
+    }
+  }
+  return nominal;
+}
+
+}  // namespace
+
+SyntheticWorkspaceSummary WriteSyntheticWorkspace(
+    const SyntheticTruth& truth,
+    const std::string& workspace,
+    bool overwrite,
+    const SyntheticWorkspaceExtras& extras) {
   OutputDirectory output(workspace, overwrite);
   SyntheticWorkspaceSummary summary;
 
   Scene colmap_truth = truth.scene;
   const std::vector<SceneCameraConversion> conversions =
       ConvertSceneCamerasToColmap(&colmap_truth);
-  Scene colmap_noisy = truth.noisy_scene;
-  ConvertSceneCamerasToColmap(&colmap_noisy);
+  Scene colmap_noisy = extras.nominal_calibration
+                           ? WithNominalCameras(truth.noisy_scene)
+                           : truth.noisy_scene;
+  const std::vector<SceneCameraConversion> database_conversions =
+      ConvertSceneCamerasToColmap(&colmap_noisy);
 
   std::vector<CalibrationEntry> calibration;
   for (const SceneCameraConversion& conversion : conversions) {
@@ -56,11 +78,11 @@ SyntheticWorkspaceSummary WriteSyntheticWorkspace(const SyntheticTruth& truth,
         ImportSceneIntoDatabase(colmap_noisy, import_options, &database);
     summary.num_pairs = imported.num_pairs;
     auto transaction = database.BeginTransaction();
-    for (const CalibrationEntry& entry : calibration) {
+    for (const SceneCameraConversion& conversion : database_conversions) {
       CalibrationRecord record;
-      record.camera = entry.camera;
-      record.colmap_fit_rms_px = entry.colmap_fit_rms_px;
-      record.colmap_fit_max_px = entry.colmap_fit_max_px;
+      record.camera = conversion.source;
+      record.colmap_fit_rms_px = conversion.conversion.rms_residual_px;
+      record.colmap_fit_max_px = conversion.conversion.max_residual_px;
       WriteCalibration(&database, record);
     }
     for (const auto& [image_id, image] : truth.scene.images) {
@@ -70,6 +92,10 @@ SyntheticWorkspaceSummary WriteSyntheticWorkspace(const SyntheticTruth& truth,
       WriteInterior(&database, image_id, interior);
     }
     transaction.Commit();
+  }
+
+  if (!extras.control.empty()) {
+    WriteSyntheticControl(extras.control, output.File("control"));
   }
 
   const SceneStats stats = truth.scene.Stats();

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include "ext/synth/control_scene.h"
 #include "ext/synth/points_scene.h"
 
 #include <string>
@@ -25,8 +26,21 @@ struct SyntheticWorkspaceSummary {
 //   gt/calibration.json the true BROWN_BEYER camera and its COLMAP fit;
 //   gt/synth.json      the options used.
 // The workspace is assembled in a temporary folder and moved into place.
-SyntheticWorkspaceSummary WriteSyntheticWorkspace(const SyntheticTruth& truth,
-                                                  const std::string& workspace,
-                                                  bool overwrite);
+//
+// Extras: `control` (when not empty) goes to control/ as the measured
+// control (ext/synth/control_scene.h); with `nominal_calibration` the
+// database gets the nominal camera (c and the pixel pitch, additional
+// parameters zero, as a user would import it) instead of the true one, so
+// that self-calibration has to find the additional parameters (gt/ keeps
+// the truth either way).
+struct SyntheticWorkspaceExtras {
+  SyntheticControl control;
+  bool nominal_calibration = false;
+};
+SyntheticWorkspaceSummary WriteSyntheticWorkspace(
+    const SyntheticTruth& truth,
+    const std::string& workspace,
+    bool overwrite,
+    const SyntheticWorkspaceExtras& extras = {});
 
 }  // namespace bayon

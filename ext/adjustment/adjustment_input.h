@@ -1,0 +1,68 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// What `bayon adjust` adjusts, gathered from a workspace: the input model
+// (a COLMAP sparse model: bayon strip's, or stock `colmap mapper`'s hosted in
+// the same database), whose tracks are the tie observations, with the image
+// coordinates taken from the database's keypoints; the cameras'
+// calibrations; the images' interior orientations; and the control.
+//
+// Cameras: to estimate the ten additional parameters the block works with
+// the BROWN_BEYER camera. Its source, in order: calibration.json beside the
+// input model (a previous adjustment), the database's bayon_calibration, or
+// the model's COLMAP camera converted to BROWN_BEYER by a fit over the
+// frame (ext/core/camera_conversion.h; the fit residual is reported). With
+// `camera_model colmap` the model's COLMAP cameras are adjusted as they are
+// (as colmap bundle_adjuster does).
+#pragma once
+
+#include "ext/adjustment/adjustment_block.h"
+#include "ext/adjustment/datum.h"
+#include "ext/core/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace bayon {
+
+enum class CameraModelChoice { kBrownBeyer, kColmap };
+
+struct AdjustmentInputOptions {
+  CameraModelChoice camera_model = CameraModelChoice::kBrownBeyer;
+  // A priori standard deviation of an image coordinate of a tie point,
+  // pixels: the reference sigma0 of the weights.
+  double image_sigma_px = 1.0;
+  DatumOptions datum;
+  void Check() const;
+};
+
+struct CameraSource {
+  camera_t camera_id = kInvalidCameraId;
+  std::string source;            // where the adjusted camera came from
+  std::string input_model;       // the model's camera model name
+  double conversion_rms_px = 0;  // fit residual of a conversion, if any
+};
+
+struct AdjustmentInput {
+  Scene scene;  // the input model, its 2D points replaced by the keypoints
+  AdjustmentBlock block;
+  DatumSetup datum;
+  std::vector<CameraSource> cameras;
+  std::vector<std::string> notes;
+};
+
+// Reads and checks everything before any adjustment. Throws InputError
+// naming the file and record for a model that does not fit the database
+// (an image missing, 2D points that are not the keypoints), cameras without
+// a usable calibration, or control that cannot define the datum.
+// `control_path` may be empty (no control: free network unless the datum
+// asks for control).
+AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
+                                    const std::string& input_path,
+                                    const std::string& control_path,
+                                    const AdjustmentInputOptions& options);
+
+// Checks that a camera has a usable calibration (finite parameters, a
+// positive focal length); throws InputError naming `what` otherwise.
+void CheckCameraCalibration(const Camera& camera, const std::string& what);
+
+}  // namespace bayon
