@@ -120,9 +120,9 @@ class Adjuster {
     if (options_.self_calibration == SelfCalibration::kSignificant) {
       SelectSignificantParameters();
     }
-    if (options_.inner_constraints) TransformToInnerConstraintDatum();
+    if (block_->free_network) TransformToInnerConstraintDatum();
     PrecisionOptions precision_options;
-    precision_options.inner_constraints = options_.inner_constraints;
+    precision_options.inner_constraints = block_->free_network;
     result_.precision = ComputePrecision(block_, precision_options);
     CollectParameters();
     result_.total_time_s = timer.Seconds();

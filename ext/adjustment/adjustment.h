@@ -19,7 +19,8 @@
 //     remaining ones are significant; correlations above a limit flagged;
 //  5. the final statistics (precision.h).
 //
-// For a free network the block holds seven parameters during the solution;
+// For a free network (AdjustmentBlock::free_network) the block holds seven
+// parameters during the solution;
 // the result is transformed into the datum of inner constraints over the
 // tie points (minimum trace of their covariance, centred on the input
 // coordinates) before the statistics are taken.
@@ -61,9 +62,6 @@ struct AdjustmentOptions {
   int max_snooping_iterations = 30;
   // Huber scale for the robust step, in reference standard deviations.
   double robust_loss_scale = 2.0;
-  // Datum: inner constraints over the tie points (a free network; the
-  // block must hold seven parameters).
-  bool inner_constraints = false;
   BundleSolverOptions solver;
   void Check() const;
 };

@@ -104,6 +104,9 @@ struct AdjustmentBlock {
   std::vector<BlockDistance> distances;
   // The reference (a priori) precision of an image coordinate, pixels.
   double sigma0_px = 1.0;
+  // A free network: seven parameters are held for the solution, and the
+  // result goes to the datum of inner constraints (datum.h, adjustment.h).
+  bool free_network = false;
 
   // Number of active observations per point.
   std::vector<int> CountPointObservations() const;

@@ -499,6 +499,7 @@ class DatumBuilder {
     int coordinate = 0;
     offset.cwiseAbs().maxCoeff(&coordinate);
     block_->images[farthest].center_fixed[coordinate] = true;
+    block_->free_network = true;
     AddManualTiePoints();
     setup_.description =
         "free network, inner constraints over the tie points (minimum "

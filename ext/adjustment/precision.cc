@@ -462,15 +462,7 @@ class PrecisionComputer {
   // Q_jj and, for the inner-constraint datum, its S-transformation.
   Eigen::Matrix3d PointCofactor(size_t j) const {
     const PointSystem& point = points_[j];
-    Eigen::Matrix3d Q = point.N_inverse;
-    for (const auto& [a, M_a] : point.M) {
-      const ParamBlock& pa = params_[a];
-      for (const auto& [b, M_b] : point.M) {
-        const ParamBlock& pb = params_[b];
-        Q += M_a.transpose() *
-             Q_kk_.block(pa.offset, pb.offset, pa.size, pb.size) * M_b;
-      }
-    }
+    Eigen::Matrix3d Q = MinimalPointCofactor(point);
     if (options_.inner_constraints) {
       const Eigen::MatrixXd g = NullSpaceRows(params_[point.block]);
       const Eigen::Matrix3d gHQ = g * HQ_point_[j];

@@ -1,0 +1,354 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// bayon adjust end to end on synthetic workspaces with known truth (control
+// points, check points and a levelling bar from `bayon synth`), and on a
+// stock `colmap mapper` model hosted in its database; bad input.
+#include "ext/colmap/model_io.h"
+#include "ext/core/file_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <random>
+
+#include "tests/testing.h"
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+void RunOk(const std::vector<std::string>& args) {
+  const testing::CommandResult result = testing::RunBayon(args);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+}
+
+// A ring of 16 stations (every other one turned 90 degrees) around 900
+// points, 0.3 px noise, the nominal camera in the database, 8 control and 4
+// check points and a levelling bar; sparse/initial is the truth with its
+// poses and points disturbed (what strip would give).
+std::string SyntheticWorkspace() {
+  return testing::SharedFixture(
+             "adjust_synthetic",
+             [](const std::string& dir) {
+               const std::string ws = dir + "/ws";
+               RunOk({"synth", "--output_path",
+                      ws,      "--num_points",
+                      "900",   "--ring_radius_m",
+                      "6",     "--alternate_roll_deg",
+                      "90",    "--max_view_angle_deg",
+                      "75",    "--num_control_points",
+                      "8",     "--num_check_points",
+                      "4",     "--levelling_bar",
+                      "1",     "--nominal_calibration",
+                      "1",     "--seed",
+                      "3"});
+               Scene scene = ReadModel(ws + "/gt/sparse");
+               std::mt19937 rng(5);
+               std::normal_distribution<double> noise(0, 1);
+               for (auto& [id, point] : scene.points3D) {
+                 point.xyz +=
+                     0.01 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+               }
+               for (auto& [id, image] : scene.images) {
+                 const Eigen::Vector3d center =
+                     image.cam_from_world.Center() +
+                     0.03 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+                 image.cam_from_world.translation =
+                     -(image.cam_from_world.rotation * center);
+               }
+               fs::create_directories(ws + "/sparse/initial");
+               WriteModel(scene, ws + "/sparse/initial", ModelFormat::kBinary);
+             }) +
+         "/ws";
+}
+
+nlohmann::json ReadJson(const std::string& path) {
+  return nlohmann::json::parse(ReadFileToString(path));
+}
+
+TEST(Adjust, SyntheticBlockWithControl) {
+  const std::string ws = SyntheticWorkspace();
+  const std::string out = testing::TempDir("adjust_control") + "/adjusted";
+  const testing::CommandResult result =
+      testing::RunBayon({"adjust",
+                         "--database_path",
+                         ws + "/database.db",
+                         "--input_path",
+                         ws + "/sparse/initial",
+                         "--output_path",
+                         out,
+                         "--control_path",
+                         ws + "/control",
+                         "--image_sigma_px",
+                         "0.3",
+                         "--log_path",
+                         out + ".log"});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  for (const char* file : {"cameras.bin",
+                           "images.bin",
+                           "points3D.bin",
+                           "calibration.json",
+                           "adjustment.json",
+                           "adjustment.txt"}) {
+    EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
+  }
+  const nlohmann::json report = ReadJson(out + "/adjustment.json");
+  const nlohmann::json& s = report["statistics"];
+  EXPECT_EQ(report["datum"]["type"], "control");
+  // sigma0 within 10 % of the injected 0.3 px noise.
+  EXPECT_NEAR(s["sigma0_px"].get<double>(), 0.3, 0.03);
+  EXPECT_EQ(s["r"].get<int>(), s["n"].get<int>() - s["u"].get<int>());
+  EXPECT_GT(s["r_over_n"].get<double>(), 0.3);
+  // The nominal camera's K3 is zero and stays out; dc, K1 are found.
+  std::set<std::string> kept;
+  for (const auto& p : report["self_calibration"]["parameters"]) {
+    kept.insert(p["name"].get<std::string>());
+  }
+  EXPECT_TRUE(kept.count("K1") && kept.count("dx0")) << report.dump();
+  EXPECT_FALSE(kept.count("K3"));
+  // Check points within 3 sigma, coordinate by coordinate.
+  ASSERT_EQ(report["check_points"]["num"].get<int>(), 4);
+  for (const auto& p : report["check_points"]["points"]) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LT(std::abs(p["difference_mm"][k].get<double>()),
+                3 * p["std_dev_mm"][k].get<double>())
+          << p.dump();
+    }
+  }
+  // The calibration carries its covariance and the COLMAP fit.
+  const nlohmann::json calibration = ReadJson(out + "/calibration.json");
+  EXPECT_EQ(calibration["cameras"][0]["model"], "BROWN_BEYER");
+  EXPECT_EQ(calibration["cameras"][0]["covariance"].size(), 13u);
+  EXPECT_GT(calibration["cameras"][0]["std_devs"]["K1"].get<double>(), 0);
+  EXPECT_LT(calibration["cameras"][0]["colmap"]["fit_rms_px"].get<double>(),
+            0.1);
+  // The model is COLMAP's: its tools read it, and it is in the truth's datum.
+  const testing::CommandResult analyzer =
+      testing::RunColmap({"model_analyzer", "--path", out});
+  EXPECT_EQ(analyzer.exit_code, 0) << analyzer.output;
+  const testing::CommandResult evaluation =
+      testing::RunBayon({"evaluate",
+                         "--input_path",
+                         out,
+                         "--ground_truth_path",
+                         ws + "/gt/sparse",
+                         "--align",
+                         "0",
+                         "--output_path",
+                         out + ".eval.json"});
+  ASSERT_EQ(evaluation.exit_code, 0) << evaluation.output;
+  const nlohmann::json eval = ReadJson(out + ".eval.json");
+  EXPECT_LT(eval["sparse"]["center_rms"].get<double>(), 0.01);
+  // The printout has the classic sections.
+  const std::string text = ReadFileToString(out + "/adjustment.txt");
+  for (const char* section : {"STATISTICS",
+                              "r/n",
+                              "sigma0 a posteriori",
+                              "CHECK POINTS",
+                              "EXTERIOR ORIENTATIONS",
+                              "OBJECT POINTS",
+                              "correlation matrix"}) {
+    EXPECT_NE(text.find(section), std::string::npos) << section;
+  }
+}
+
+TEST(Adjust, MinimumDatumAndFreeNetwork) {
+  const std::string ws = SyntheticWorkspace();
+  const std::string dir = testing::TempDir("adjust_minimum");
+  // The paper's minimum datum: the levelling bar and one more point; every
+  // other control point becomes a check point, in the truth's system.
+  RunOk({"adjust",
+         "--database_path",
+         ws + "/database.db",
+         "--input_path",
+         ws + "/sparse/initial",
+         "--output_path",
+         dir + "/minimum",
+         "--control_path",
+         ws + "/control",
+         "--datum",
+         "minimum",
+         "--image_sigma_px",
+         "0.3",
+         "--log_path",
+         dir + "/log"});
+  const nlohmann::json minimum = ReadJson(dir + "/minimum/adjustment.json");
+  EXPECT_EQ(minimum["datum"]["type"], "minimum");
+  EXPECT_EQ(minimum["statistics"]["d"].get<int>(), 0);
+  EXPECT_EQ(minimum["check_points"]["num"].get<int>(), 4 + 8 - 1);
+  int within = 0, total = 0;
+  for (const auto& p : minimum["check_points"]["points"]) {
+    for (int k = 0; k < 3; ++k) {
+      ++total;
+      within += std::abs(p["difference_mm"][k].get<double>()) <
+                3 * p["std_dev_mm"][k].get<double>();
+    }
+  }
+  EXPECT_GE(within, total - 1) << minimum["check_points"].dump();
+
+  // A free network: datum defect 7, the same sigma0 (the datum does not
+  // change the residuals), precision from inner constraints.
+  RunOk({"adjust",
+         "--database_path",
+         ws + "/database.db",
+         "--input_path",
+         ws + "/sparse/initial",
+         "--output_path",
+         dir + "/free",
+         "--datum",
+         "free",
+         "--image_sigma_px",
+         "0.3",
+         "--log_path",
+         dir + "/log"});
+  const nlohmann::json free = ReadJson(dir + "/free/adjustment.json");
+  EXPECT_EQ(free["datum"]["type"], "free");
+  EXPECT_EQ(free["statistics"]["d"].get<int>(), 7);
+  EXPECT_NEAR(free["statistics"]["sigma0_px"].get<double>(), 0.3, 0.03);
+  const nlohmann::json& rms = free["statistics"]["point_precision_rms_mm"];
+  for (int k = 0; k < 3; ++k) EXPECT_GT(rms[k].get<double>(), 0);
+}
+
+// A COLMAP user's project: stock colmap mapper on the database, then bayon
+// adjust with control and self-calibration on that model.
+TEST(Adjust, StockColmapModelWithControl) {
+  const std::string dir = testing::TempDir("adjust_colmap");
+  const std::string ws = dir + "/ws";
+  RunOk({"synth",
+         "--output_path",
+         ws,
+         "--num_control_points",
+         "6",
+         "--num_check_points",
+         "4",
+         "--seed",
+         "2"});
+  fs::copy_file(ws + "/database.db", dir + "/colmap.db");
+  fs::create_directories(dir + "/mapper");
+  const testing::CommandResult mapper =
+      testing::RunColmap({"mapper",
+                          "--database_path",
+                          dir + "/colmap.db",
+                          "--image_path",
+                          ws + "/images",
+                          "--output_path",
+                          dir + "/mapper",
+                          "--Mapper.ba_refine_extra_params",
+                          "0"});
+  ASSERT_EQ(mapper.exit_code, 0) << mapper.output;
+  RunOk({"adjust",
+         "--database_path",
+         ws + "/database.db",
+         "--input_path",
+         dir + "/mapper/0",
+         "--output_path",
+         dir + "/adjusted",
+         "--control_path",
+         ws + "/control",
+         "--image_sigma_px",
+         "0.3",
+         "--log_path",
+         dir + "/log"});
+  const nlohmann::json report = ReadJson(dir + "/adjusted/adjustment.json");
+  EXPECT_EQ(report["datum"]["type"], "control");
+  // The mapper's model is in its own system: the similarity brings it in.
+  EXPECT_GT(
+      std::abs(report["datum"]["object_from_model"]["scale"].get<double>() -
+               1.0),
+      1e-3);
+  EXPECT_NEAR(report["statistics"]["sigma0_px"].get<double>(), 0.3, 0.03);
+  EXPECT_LT(report["check_points"]["rms_3d_mm"].get<double>(), 10.0);
+}
+
+// Bad input: one line naming the problem, exit code 2, nothing written.
+class AdjustBadInput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ws_ = SyntheticWorkspace();
+    dir_ = testing::TempDir(
+        std::string("adjust_bad_") +
+        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  }
+
+  void ExpectRefused(const std::string& control,
+                     const std::vector<std::string>& extra,
+                     const std::string& expected,
+                     const std::string& input = "") {
+    std::vector<std::string> args = {
+        "adjust",
+        "--database_path",
+        ws_ + "/database.db",
+        "--input_path",
+        input.empty() ? ws_ + "/sparse/initial" : input,
+        "--output_path",
+        dir_ + "/out",
+        "--log_path",
+        dir_ + "/log"};
+    if (!control.empty()) {
+      args.push_back("--control_path");
+      args.push_back(control);
+    }
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto before = testing::HashTree(ws_);
+    const testing::CommandResult result = testing::RunBayon(args);
+    EXPECT_EQ(result.exit_code, 2) << result.output;
+    EXPECT_NE(result.LastLine().find(expected), std::string::npos)
+        << "expected '" << expected << "' in: " << result.output;
+    EXPECT_FALSE(fs::exists(dir_ + "/out"));
+    EXPECT_EQ(testing::HashTree(ws_), before);
+  }
+
+  // A copy of the control folder with points.txt replaced.
+  std::string Control(const std::string& points) {
+    const std::string control = dir_ + "/control";
+    testing::CopyTree(ws_ + "/control", control);
+    WriteFileAtomically(control + "/points.txt", points);
+    return control;
+  }
+
+  std::string ws_;
+  std::string dir_;
+};
+
+TEST_F(AdjustBadInput, NoControlWhereTheDatumNeedsIt) {
+  ExpectRefused("", {"--datum", "control"}, "no control points");
+  ExpectRefused("", {"--datum", "minimum"}, "vertical levelling bar");
+}
+
+TEST_F(AdjustBadInput, FewerThanThreeControlPoints) {
+  ExpectRefused(Control("C01 1.8477590650225735 0.76536686473017956 0.8\n"
+                        "C02 0.76536686473017967 1.8477590650225735 3.2\n"),
+                {"--datum", "control"},
+                "needs three control points");
+}
+
+TEST_F(AdjustBadInput, ControlPointSeenInNoImage) {
+  ExpectRefused(Control("C01 1.8477590650225735 0.76536686473017956 0.8\n"
+                        "NOWHERE 0 0 0\n"),
+                {},
+                "'NOWHERE' is measured in no image");
+}
+
+TEST_F(AdjustBadInput, CollinearControl) {
+  // Three control points on one line (coordinates given on a line, whatever
+  // the images say).
+  ExpectRefused(Control("C01 0 0 1\nC02 0 0 2\nC03 0 0 3\n"),
+                {"--datum", "control"},
+                "collinear");
+}
+
+TEST_F(AdjustBadInput, CameraWithoutCalibration) {
+  Scene scene = ReadModel(ws_ + "/sparse/initial");
+  for (auto& [id, camera] : scene.cameras) {
+    for (int idx : camera.ModelInfo().focal_idxs) camera.params[idx] = 0;
+  }
+  const std::string model = dir_ + "/model";
+  fs::create_directories(model);
+  WriteModel(scene, model, ModelFormat::kBinary);
+  ExpectRefused("", {}, "has no calibration", model);
+}
+
+}  // namespace
+}  // namespace bayon
