@@ -211,6 +211,65 @@ TEST(Adjust, MinimumDatumAndFreeNetwork) {
   for (int k = 0; k < 3; ++k) EXPECT_GT(rms[k].get<double>(), 0);
 }
 
+// bayon's own chain: strip (chained models, similarity to the control),
+// then adjust.
+TEST(Adjust, StripThenAdjust) {
+  const std::string ws = SyntheticWorkspace();
+  const std::string dir = testing::TempDir("adjust_strip");
+  const testing::CommandResult strip = testing::RunBayon({"strip",
+                                                          "--database_path",
+                                                          ws + "/database.db",
+                                                          "--output_path",
+                                                          dir + "/initial",
+                                                          "--control_path",
+                                                          ws + "/control",
+                                                          "--log_path",
+                                                          dir + "/log"});
+  ASSERT_EQ(strip.exit_code, 0) << strip.output;
+  EXPECT_NE(strip.output.find("16 images oriented"), std::string::npos)
+      << strip.output;
+  const nlohmann::json report = ReadJson(dir + "/initial/strip.json");
+  EXPECT_TRUE(report["closed_ring"].get<bool>());
+  EXPECT_EQ(report["similarity"]["residuals"].size(), 10u);
+  RunOk({"adjust",
+         "--database_path",
+         ws + "/database.db",
+         "--input_path",
+         dir + "/initial",
+         "--output_path",
+         dir + "/adjusted",
+         "--control_path",
+         ws + "/control",
+         "--image_sigma_px",
+         "0.3",
+         "--log_path",
+         dir + "/log"});
+  const nlohmann::json adjusted = ReadJson(dir + "/adjusted/adjustment.json");
+  EXPECT_NEAR(adjusted["statistics"]["sigma0_px"].get<double>(), 0.3, 0.03);
+  RunOk({"evaluate",
+         "--input_path",
+         dir + "/adjusted",
+         "--ground_truth_path",
+         ws + "/gt/sparse",
+         "--align",
+         "0",
+         "--output_path",
+         dir + "/eval.json"});
+  const nlohmann::json eval = ReadJson(dir + "/eval.json");
+  EXPECT_LT(eval["sparse"]["center_rms"].get<double>(), 0.01);
+  // Bad input: an output that exists is refused, nothing changes.
+  const auto before = testing::HashTree(dir + "/initial");
+  const testing::CommandResult again = testing::RunBayon({"strip",
+                                                          "--database_path",
+                                                          ws + "/database.db",
+                                                          "--output_path",
+                                                          dir + "/initial",
+                                                          "--log_path",
+                                                          dir + "/log"});
+  EXPECT_EQ(again.exit_code, 2) << again.output;
+  EXPECT_EQ(testing::HashTree(dir + "/initial"), before);
+}
+
 // A COLMAP user's project: stock colmap mapper on the database, then bayon
 // adjust with control and self-calibration on that model.
 TEST(Adjust, StockColmapModelWithControl) {

@@ -7,6 +7,7 @@ namespace bayon {
 // command name. They return the exit code: 0 done, 1 ran but produced
 // nothing usable; bad input throws InputError (exit 2 in main).
 int RunAdjust(int argc, char** argv);
+int RunStripCommand(int argc, char** argv);
 int RunImport(int argc, char** argv);
 int RunModelConverter(int argc, char** argv);
 int RunSynth(int argc, char** argv);

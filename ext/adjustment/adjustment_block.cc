@@ -4,6 +4,7 @@
 #include "ext/adjustment/cost_functions.h"
 #include "ext/core/errors.h"
 
+#include <limits>
 #include <map>
 
 namespace bayon {
@@ -162,6 +163,24 @@ std::vector<ResidualTerm> BuildResidualTerms(AdjustmentBlock* block) {
     terms.push_back(std::move(term));
   }
   return terms;
+}
+
+std::vector<Eigen::Vector2d> ImageResiduals(AdjustmentBlock* block) {
+  std::vector<Eigen::Vector2d> residuals(
+      block->observations.size(),
+      Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  for (const ResidualTerm& term : BuildResidualTerms(block)) {
+    if (term.type != TermType::kReprojection) continue;
+    Eigen::Vector2d weighted;
+    if (!term.cost->Evaluate(
+            term.parameters.data(), weighted.data(), nullptr)) {
+      continue;
+    }
+    const BlockObservation& observation = block->observations[term.index];
+    residuals[term.index] =
+        weighted * (observation.sigma_px / block->sigma0_px);
+  }
+  return residuals;
 }
 
 AdjustmentBlock BlockFromScene(const Scene& scene, double sigma_px) {

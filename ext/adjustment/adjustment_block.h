@@ -143,6 +143,10 @@ ceres::CostFunction* CreateReprojectionCost(
 // (they point into it) and must not be resized meanwhile.
 std::vector<ResidualTerm> BuildResidualTerms(AdjustmentBlock* block);
 
+// Image residuals (projected - observed, pixels) of every observation of the
+// block; NaN for inactive ones and for points that cannot be projected.
+std::vector<Eigen::Vector2d> ImageResiduals(AdjustmentBlock* block);
+
 // ---------------------------------------------------------------------------
 // Conversion from and to scenes.
 

@@ -1,0 +1,856 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/adjustment/strip.h"
+
+#include "ext/adjustment/adjustment_block.h"
+#include "ext/adjustment/adjustment_input.h"
+#include "ext/adjustment/bundle_solver.h"
+#include "ext/adjustment/precision.h"
+#include "ext/adjustment/triangulation.h"
+#include "ext/colmap/bayon_tables.h"
+#include "ext/colmap/database.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/core/progress.h"
+
+#include <Eigen/Dense>
+#include <glog/logging.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <unordered_map>
+
+namespace bayon {
+namespace {
+
+struct StripImage {
+  DatabaseImage row;
+  int camera_idx = -1;
+  FeatureKeypoints keypoints;
+  ImageFrame frame;
+  bool placed = false;
+  Rigid3d cam_from_world;
+  // Normalised rays (u, v, 1) of the keypoints, computed on demand.
+  std::vector<std::optional<Eigen::Vector3d>> rays;
+  std::vector<bool> ray_done;
+};
+
+// Union-find over (image, keypoint) for the tracks of the verified matches.
+class DisjointSets {
+ public:
+  int Add() {
+    parent_.push_back(static_cast<int>(parent_.size()));
+    return parent_.back();
+  }
+  int Find(int x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  void Union(int a, int b) { parent_[Find(a)] = Find(b); }
+
+ private:
+  std::vector<int> parent_;
+};
+
+double Median(std::vector<double> values) {
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  return values[mid];
+}
+
+Eigen::Quaterniond ExpRotation(const Eigen::Vector3d& omega) {
+  const double angle = omega.norm();
+  if (angle < 1e-15) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle));
+}
+
+Eigen::Vector3d LogRotation(const Eigen::Quaterniond& q) {
+  const Eigen::AngleAxisd aa(q.normalized());
+  return aa.angle() * aa.axis();
+}
+
+class StripBuilder {
+ public:
+  StripBuilder(const std::string& database_path,
+               const std::string& control_path,
+               const StripOptions& options)
+      : database_path_(database_path),
+        control_path_(control_path),
+        options_(options) {}
+
+  StripResult Build() {
+    Timer timer;
+    const ControlData control = ReadControlFolder(control_path_);
+    LoadImagesAndCameras();
+    BuildTracks();
+    ChainModels();
+    CloseRing();
+    TriangulateTracks();
+    MakeBlock();
+    if (options_.adjust) AdjustStrip();
+    if (!control.empty() && options_.datum.datum != DatumType::kFree) {
+      ApplyControl(control);
+    }
+    MakeModel();
+    result_.time_s = timer.Seconds();
+    return std::move(result_);
+  }
+
+ private:
+  // ---------------------------------------------------------------- input
+  void LoadImagesAndCameras() {
+    CheckFileExists(database_path_, "--database_path");
+    Database database(database_path_, Database::Mode::kReadOnly);
+    std::vector<DatabaseImage> rows = database.ReadAllImages();
+    if (rows.size() < 2) {
+      ThrowInputError(database_path_,
+                      ": ",
+                      rows.size(),
+                      " images; a strip needs two or more");
+    }
+    // The sequence as photographed: images in the order of their names.
+    std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+      return a.name < b.name;
+    });
+    std::map<camera_t, CalibrationRecord> calibrations;
+    std::map<image_t, InteriorRecord> interiors;
+    if (BayonTableExists(&database, kCalibrationTable.name)) {
+      calibrations = ReadAllCalibrations(&database);
+    }
+    if (BayonTableExists(&database, kInteriorTable.name)) {
+      interiors = ReadAllInteriors(&database);
+    }
+    std::map<camera_t, int> camera_idxs;
+    for (const DatabaseImage& row : rows) {
+      if (camera_idxs.count(row.camera_id) == 0) {
+        const Camera colmap_camera = database.ReadCamera(row.camera_id);
+        Camera camera = colmap_camera;
+        auto record = calibrations.find(row.camera_id);
+        if (record != calibrations.end()) {
+          camera = record->second.camera;
+          camera.camera_id = row.camera_id;
+        } else if (!colmap_camera.has_prior_focal_length) {
+          ThrowInputError(database_path_,
+                          ": camera ",
+                          row.camera_id,
+                          " has no calibration (its focal length is COLMAP's "
+                          "default guess and there is no bayon_calibration); "
+                          "give the lens with bayon import --focal_length_mm "
+                          "or calibrate the camera first");
+        }
+        CheckCameraCalibration(camera, database_path_);
+        camera_idxs[row.camera_id] = static_cast<int>(colmap_cameras_.size());
+        colmap_cameras_.push_back(colmap_camera);
+        cameras_.push_back(camera);
+      }
+      StripImage image;
+      image.row = row;
+      image.camera_idx = camera_idxs.at(row.camera_id);
+      image.keypoints = database.ReadKeypoints(row.image_id);
+      auto interior = interiors.find(row.image_id);
+      image.frame = interior != interiors.end()
+                        ? interior->second.frame
+                        : cameras_[image.camera_idx].DefaultFrame();
+      image.rays.resize(image.keypoints.rows());
+      image.ray_done.assign(image.keypoints.rows(), false);
+      image_idxs_[row.image_id] = static_cast<int>(images_.size());
+      images_.push_back(std::move(image));
+    }
+    for (auto& [pair_id, geometry] : database.ReadAllTwoViewGeometries()) {
+      if (geometry.inlier_matches.rows() == 0) continue;
+      const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+      if (!image_idxs_.count(id1) || !image_idxs_.count(id2)) continue;
+      geometries_[{image_idxs_.at(id1), image_idxs_.at(id2)}] = geometry;
+    }
+    if (geometries_.empty()) {
+      ThrowInputError(database_path_,
+                      ": no verified image pairs (two_view_geometries); run "
+                      "bayon match and bayon relative, or a COLMAP matcher");
+    }
+  }
+
+  const Eigen::Vector3d* Ray(int image_idx, int keypoint) {
+    StripImage& image = images_[image_idx];
+    if (!image.ray_done[keypoint]) {
+      Eigen::Vector3d ray;
+      if (cameras_[image.camera_idx].CamFromImg(
+              KeypointXY(image.keypoints, keypoint), &ray, &image.frame)) {
+        image.rays[keypoint] = ray;
+      }
+      image.ray_done[keypoint] = true;
+    }
+    return image.rays[keypoint] ? &*image.rays[keypoint] : nullptr;
+  }
+
+  // --------------------------------------------------------------- tracks
+  static int64_t Key(int image_idx, int keypoint) {
+    return (static_cast<int64_t>(image_idx) << 32) | keypoint;
+  }
+
+  void BuildTracks() {
+    DisjointSets sets;
+    std::unordered_map<int64_t, int> element_of;
+    std::vector<std::pair<int, int>> elements;
+    auto element = [&](int image_idx, int keypoint) {
+      const int64_t key = Key(image_idx, keypoint);
+      auto it = element_of.find(key);
+      if (it != element_of.end()) return it->second;
+      const int id = sets.Add();
+      element_of.emplace(key, id);
+      elements.push_back({image_idx, keypoint});
+      return id;
+    };
+    for (const auto& [pair, geometry] : geometries_) {
+      const FeatureMatches& matches = geometry.inlier_matches;
+      for (Eigen::Index m = 0; m < matches.rows(); ++m) {
+        sets.Union(element(pair.first, matches(m, 0)),
+                   element(pair.second, matches(m, 1)));
+      }
+    }
+    std::unordered_map<int, int> track_of_root;
+    for (size_t e = 0; e < elements.size(); ++e) {
+      const int root = sets.Find(static_cast<int>(e));
+      auto it = track_of_root.find(root);
+      if (it == track_of_root.end()) {
+        it =
+            track_of_root.emplace(root, static_cast<int>(tracks_.size())).first;
+        tracks_.emplace_back();
+      }
+      tracks_[it->second].push_back(elements[e]);
+    }
+    // A track with two keypoints in one image joins points that differ:
+    // it is dropped (COLMAP keeps only a consistent part; the adjustment
+    // must not see contradictions).
+    std::vector<std::vector<std::pair<int, int>>> consistent;
+    for (auto& track : tracks_) {
+      std::sort(track.begin(), track.end());
+      bool ok = track.size() >= 2;
+      for (size_t i = 1; i < track.size() && ok; ++i) {
+        ok = track[i].first != track[i - 1].first;
+      }
+      if (ok) consistent.push_back(std::move(track));
+    }
+    tracks_ = std::move(consistent);
+    track_points_.assign(tracks_.size(), std::nullopt);
+    track_at_.assign(images_.size(), {});
+    for (size_t t = 0; t < tracks_.size(); ++t) {
+      for (const auto& [image_idx, keypoint] : tracks_[t]) {
+        track_at_[image_idx][keypoint] = static_cast<int>(t);
+      }
+    }
+    result_.num_tracks = static_cast<int>(tracks_.size());
+  }
+
+  // ------------------------------------------------------------- chaining
+  // cam_b_from_cam_a with |t| = 1 from the pair's geometry, or nullopt.
+  std::optional<Rigid3d> RelativeOrientation(int a,
+                                             int b,
+                                             const TwoViewGeometry& geometry,
+                                             std::string* reason) {
+    if (geometry.qvec && geometry.tvec && geometry.tvec->norm() > 1e-12 &&
+        geometry.qvec->norm() > 0.5) {
+      const Eigen::Vector4d& q = *geometry.qvec;
+      return Rigid3d(Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized(),
+                     geometry.tvec->normalized());
+    }
+    Eigen::Matrix3d E;
+    if (geometry.E && geometry.E->norm() > 1e-12) {
+      E = *geometry.E;
+    } else {
+      *reason = "no relative orientation (qvec/tvec or E) for the pair";
+      return std::nullopt;
+    }
+    return DecomposeEssential(a, b, E, geometry.inlier_matches, reason);
+  }
+
+  // E = [t]x R: the four (R, t) of the SVD, the one with most intersections
+  // in front of both cameras (cheirality).
+  std::optional<Rigid3d> DecomposeEssential(int a,
+                                            int b,
+                                            const Eigen::Matrix3d& E,
+                                            const FeatureMatches& matches,
+                                            std::string* reason) {
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(
+        E, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+    if (U.determinant() < 0) U = -U;
+    if (V.determinant() < 0) V = -V;
+    Eigen::Matrix3d W;
+    W << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+    const Eigen::Matrix3d rotations[2] = {U * W * V.transpose(),
+                                          U * W.transpose() * V.transpose()};
+    const Eigen::Vector3d t = U.col(2);
+    int best_count = -1;
+    Rigid3d best;
+    for (const Eigen::Matrix3d& R : rotations) {
+      for (double sign : {1.0, -1.0}) {
+        const Rigid3d candidate(Eigen::Quaterniond(R).normalized(), sign * t);
+        int count = 0;
+        for (Eigen::Index m = 0; m < matches.rows(); ++m) {
+          count += ModelPoint(a, matches(m, 0), b, matches(m, 1), candidate)
+                       .has_value();
+        }
+        if (count > best_count) {
+          best_count = count;
+          best = candidate;
+        }
+      }
+    }
+    if (best_count < 5) {
+      *reason = "the essential matrix has no solution in front of both images";
+      return std::nullopt;
+    }
+    return best;
+  }
+
+  // Intersection of two rays in the model of (a, b): a at the origin, b at
+  // cam_b_from_cam_a; coordinates in camera a's frame.
+  std::optional<Eigen::Vector3d> ModelPoint(
+      int a, int keypoint_a, int b, int keypoint_b, const Rigid3d& b_from_a) {
+    const Eigen::Vector3d* ray_a = Ray(a, keypoint_a);
+    const Eigen::Vector3d* ray_b = Ray(b, keypoint_b);
+    if (ray_a == nullptr || ray_b == nullptr) return std::nullopt;
+    const std::vector<bayon::Ray> rays = {
+        {Eigen::Vector3d::Zero(), ray_a->normalized()},
+        {b_from_a.Inverse().translation,
+         (b_from_a.rotation.inverse() * *ray_b).normalized()}};
+    return IntersectRays(rays, options_.min_intersection_angle_deg);
+  }
+
+  struct ModelPoints {
+    std::vector<int> tracks;
+    std::vector<Eigen::Vector3d> xyz;  // camera a's frame, base 1
+  };
+
+  ModelPoints IntersectModel(int a, int b, const Rigid3d& b_from_a) {
+    ModelPoints points;
+    for (const auto& [keypoint_a, track] : track_at_[a]) {
+      auto it = std::find_if(
+          tracks_[track].begin(),
+          tracks_[track].end(),
+          [b](const std::pair<int, int>& e) { return e.first == b; });
+      if (it == tracks_[track].end()) continue;
+      const std::optional<Eigen::Vector3d> xyz =
+          ModelPoint(a, keypoint_a, b, it->second, b_from_a);
+      if (!xyz) continue;
+      points.tracks.push_back(track);
+      points.xyz.push_back(*xyz);
+    }
+    return points;
+  }
+
+  const TwoViewGeometry* Geometry(int a, int b, bool* swapped) const {
+    auto it = geometries_.find({a, b});
+    if (it != geometries_.end()) {
+      *swapped = false;
+      return &it->second;
+    }
+    it = geometries_.find({b, a});
+    if (it != geometries_.end()) {
+      *swapped = true;
+      return &it->second;
+    }
+    return nullptr;
+  }
+
+  // Scale of a model (strip units per model unit) from its points shared
+  // with the strip: their distances from camera a's centre.
+  std::optional<double> TransferScale(int a,
+                                      const ModelPoints& points,
+                                      StripModel* model) const {
+    const Eigen::Vector3d center_a = images_[a].cam_from_world.Center();
+    std::vector<double> ratios;
+    for (size_t i = 0; i < points.tracks.size(); ++i) {
+      const auto& world = track_points_[points.tracks[i]];
+      if (!world) continue;
+      const double model_distance = points.xyz[i].norm();
+      if (model_distance <= 0) continue;
+      ratios.push_back((*world - center_a).norm() / model_distance);
+    }
+    model->num_common_points = static_cast<int>(ratios.size());
+    if (static_cast<int>(ratios.size()) < options_.min_common_points) {
+      model->reason = StrCat("only ",
+                             ratios.size(),
+                             " tie points shared with the strip for the "
+                             "scale transfer");
+      return std::nullopt;
+    }
+    const double scale = Median(ratios);
+    std::vector<double> deviations;
+    for (double r : ratios) deviations.push_back(std::abs(r / scale - 1));
+    model->scale_spread = 1.4826 * Median(deviations);
+    return scale;
+  }
+
+  // Tries to attach image b to the strip through the model (a, b).
+  bool Connect(int a, int b, bool first_model) {
+    StripModel model;
+    model.image1 = images_[a].row.name;
+    model.image2 = images_[b].row.name;
+    bool swapped = false;
+    const TwoViewGeometry* geometry = Geometry(a, b, &swapped);
+    if (geometry == nullptr) {
+      model.reason = "no verified matches";
+      result_.models.push_back(model);
+      return false;
+    }
+    model.num_matches = static_cast<int>(geometry->inlier_matches.rows());
+    const TwoViewGeometry oriented =
+        swapped ? InvertTwoViewGeometry(*geometry) : *geometry;
+    const std::optional<Rigid3d> b_from_a =
+        RelativeOrientation(a, b, oriented, &model.reason);
+    if (!b_from_a) {
+      result_.models.push_back(model);
+      return false;
+    }
+    const ModelPoints points = IntersectModel(a, b, *b_from_a);
+    model.num_points = static_cast<int>(points.tracks.size());
+    double scale = 1.0;
+    if (!first_model) {
+      const std::optional<double> transferred =
+          TransferScale(a, points, &model);
+      if (!transferred) {
+        result_.models.push_back(model);
+        return false;
+      }
+      scale = *transferred;
+    }
+    model.scale = scale;
+    model.connected = true;
+    const Rigid3d& a_from_world = images_[a].cam_from_world;
+    const Rigid3d scaled(b_from_a->rotation, scale * b_from_a->translation);
+    images_[b].cam_from_world = scaled * a_from_world;
+    images_[b].placed = true;
+    const Rigid3d world_from_a = a_from_world.Inverse();
+    for (size_t i = 0; i < points.tracks.size(); ++i) {
+      if (!track_points_[points.tracks[i]]) {
+        track_points_[points.tracks[i]] =
+            world_from_a * (scale * points.xyz[i]);
+      }
+    }
+    sequence_.push_back(b);
+    result_.models.push_back(model);
+    return true;
+  }
+
+  void ChainModels() {
+    images_[0].placed = true;
+    images_[0].cam_from_world = Rigid3d();
+    sequence_.push_back(0);
+    if (!Connect(0, 1, true)) {
+      throw RunFailure(StrCat("the first model (",
+                              images_[0].row.name,
+                              ", ",
+                              images_[1].row.name,
+                              ") cannot be formed: ",
+                              result_.models.back().reason));
+    }
+    for (size_t b = 2; b < images_.size(); ++b) {
+      bool connected = false;
+      for (int gap = 1; gap <= options_.max_gap && !connected; ++gap) {
+        const int a = static_cast<int>(b) - gap;
+        if (a < 0 || !images_[a].placed) continue;
+        connected = Connect(a, static_cast<int>(b), false);
+      }
+      if (!connected) {
+        result_.unoriented_images.push_back(images_[b].row.name);
+        LOG(WARNING) << "strip: " << images_[b].row.name
+                     << " could not be connected: "
+                     << result_.models.back().reason;
+      }
+    }
+  }
+
+  // ---------------------------------------------------------------- ring
+  void CloseRing() {
+    if (options_.ring == RingClosure::kOpen || sequence_.size() < 3) return;
+    const int last = sequence_.back();
+    const int first = sequence_.front();
+    bool swapped = false;
+    const TwoViewGeometry* geometry = Geometry(last, first, &swapped);
+    std::string reason;
+    std::optional<Rigid3d> first_from_last;
+    if (geometry != nullptr) {
+      first_from_last = RelativeOrientation(
+          last,
+          first,
+          swapped ? InvertTwoViewGeometry(*geometry) : *geometry,
+          &reason);
+    }
+    StripModel model;
+    model.image1 = images_[last].row.name;
+    model.image2 = images_[first].row.name;
+    std::optional<double> scale;
+    ModelPoints points;
+    if (first_from_last) {
+      points = IntersectModel(last, first, *first_from_last);
+      model.num_points = static_cast<int>(points.tracks.size());
+      scale = TransferScale(last, points, &model);
+    } else {
+      model.reason = geometry == nullptr ? "no verified matches" : reason;
+    }
+    if (!scale) {
+      if (options_.ring == RingClosure::kClosed) {
+        LOG(WARNING) << "strip: the ring cannot be closed: " << model.reason;
+      }
+      if (geometry != nullptr) result_.models.push_back(model);
+      return;
+    }
+    model.connected = true;
+    model.scale = *scale;
+    result_.models.push_back(model);
+    result_.closed_ring = true;
+
+    // The first image as the ring predicts it, against where it is.
+    const Rigid3d& last_from_world = images_[last].cam_from_world;
+    const Rigid3d predicted = Rigid3d(first_from_last->rotation,
+                                      *scale * first_from_last->translation) *
+                              last_from_world;
+    const Rigid3d& actual = images_[first].cam_from_world;
+    // Path length around the ring.
+    std::vector<double> path(sequence_.size(), 0.0);
+    for (size_t i = 1; i < sequence_.size(); ++i) {
+      path[i] =
+          path[i - 1] + (images_[sequence_[i]].cam_from_world.Center() -
+                         images_[sequence_[i - 1]].cam_from_world.Center())
+                            .norm();
+    }
+    const double total =
+        path.back() + (predicted.Center() - last_from_world.Center()).norm();
+    const Eigen::Vector3d position_error = actual.Center() - predicted.Center();
+    // R_first' = R_first W: the accumulated turn of the world, undone along
+    // the ring in proportion to each image's place.
+    const Eigen::Vector3d omega =
+        LogRotation(actual.rotation.inverse() * predicted.rotation);
+    result_.closure_rotation_deg = omega.norm() * 180.0 / M_PI;
+    result_.closure_position_relative = position_error.norm() / total;
+    // The scale error: distances from the first centre to the shared points,
+    // as the strip has them and as the closing model has them.
+    std::vector<double> ratios;
+    const Rigid3d world_from_last = last_from_world.Inverse();
+    for (size_t i = 0; i < points.tracks.size(); ++i) {
+      const auto& world = track_points_[points.tracks[i]];
+      if (!world) continue;
+      const Eigen::Vector3d closing =
+          world_from_last * (*scale * points.xyz[i]);
+      const double d_closing = (closing - predicted.Center()).norm();
+      if (d_closing > 0) {
+        ratios.push_back((*world - actual.Center()).norm() / d_closing);
+      }
+    }
+    if (!ratios.empty()) result_.closure_scale = Median(ratios);
+    LOG(INFO) << "strip: ring closure error " << result_.closure_rotation_deg
+              << " deg, " << 100 * result_.closure_position_relative
+              << " % of the path, scale " << result_.closure_scale;
+    for (size_t i = 1; i < sequence_.size(); ++i) {
+      const double f = path[i] / total;
+      StripImage& image = images_[sequence_[i]];
+      const Eigen::Vector3d center =
+          image.cam_from_world.Center() + f * position_error;
+      const Eigen::Quaterniond rotation =
+          (image.cam_from_world.rotation * ExpRotation(-f * omega))
+              .normalized();
+      image.cam_from_world = Rigid3d(rotation, -(rotation * center));
+    }
+  }
+
+  // Every track from all the rays of its oriented images.
+  void TriangulateTracks() {
+    for (size_t t = 0; t < tracks_.size(); ++t) {
+      std::vector<bayon::Ray> rays;
+      for (const auto& [image_idx, keypoint] : tracks_[t]) {
+        const StripImage& image = images_[image_idx];
+        if (!image.placed) continue;
+        const Eigen::Vector3d* ray = Ray(image_idx, keypoint);
+        if (ray == nullptr) continue;
+        rays.push_back(
+            {image.cam_from_world.Center(),
+             (image.cam_from_world.rotation.inverse() * *ray).normalized()});
+      }
+      track_points_[t] =
+          IntersectRays(rays, options_.min_intersection_angle_deg);
+    }
+  }
+
+  // ------------------------------------------------------------ adjustment
+  void MakeBlock() {
+    block_.sigma0_px = options_.image_sigma_px;
+    for (const Camera& camera : cameras_) {
+      BlockCamera block_camera;
+      block_camera.camera = camera;
+      block_camera.free.assign(camera.params.size(), false);
+      block_camera.source_model = camera.model_id;
+      block_.cameras.push_back(block_camera);
+    }
+    std::vector<int> block_image(images_.size(), -1);
+    for (int idx : sequence_) {
+      const StripImage& image = images_[idx];
+      BlockImage block_image_entry;
+      block_image_entry.image_id = image.row.image_id;
+      block_image_entry.name = image.row.name;
+      block_image_entry.camera_idx = image.camera_idx;
+      block_image_entry.SetCamFromWorld(image.cam_from_world);
+      block_image_entry.frame = image.frame;
+      block_image[idx] = static_cast<int>(block_.images.size());
+      block_.images.push_back(block_image_entry);
+    }
+    for (size_t t = 0; t < tracks_.size(); ++t) {
+      if (!track_points_[t]) continue;
+      BlockPoint point;
+      point.point3D_id = block_.points.size() + 1;
+      point.xyz = *track_points_[t];
+      point.color = Eigen::Matrix<uint8_t, 3, 1>(128, 128, 128);
+      const int point_idx = static_cast<int>(block_.points.size());
+      int count = 0;
+      for (const auto& [image_idx, keypoint] : tracks_[t]) {
+        if (block_image[image_idx] < 0) continue;
+        BlockObservation observation;
+        observation.image_idx = block_image[image_idx];
+        observation.point_idx = point_idx;
+        observation.point2D_idx = keypoint;
+        observation.xy = KeypointXY(images_[image_idx].keypoints, keypoint);
+        observation.sigma_px = options_.image_sigma_px;
+        block_.observations.push_back(observation);
+        ++count;
+      }
+      if (count < 2) {
+        block_.observations.resize(block_.observations.size() - count);
+        continue;
+      }
+      block_.points.push_back(point);
+    }
+  }
+
+  // The strip adjustment in model coordinates: the first image and the
+  // scale of the first model held (a minimal datum), a robust solution,
+  // observations above the residual limit removed, a least-squares solution.
+  void AdjustStrip() {
+    if (block_.points.empty()) throw RunFailure("no tie point intersected");
+    BlockImage& first = block_.images[0];
+    first.rotation_fixed = true;
+    first.center_fixed = {true, true, true};
+    BlockImage& second = block_.images[1];
+    int coordinate = 0;
+    (second.center - first.center).cwiseAbs().maxCoeff(&coordinate);
+    second.center_fixed[coordinate] = true;
+    BundleSolverOptions solver;
+    solver.num_threads = options_.num_threads;
+    solver.loss = RobustLoss::kHuber;
+    solver.loss_scale = 2.0;
+    for (BlockObservation& o : block_.observations) {
+      const BlockImage& image = block_.images[o.image_idx];
+      if ((image.CamFromWorld() * block_.points[o.point_idx].xyz).z() <= 0) {
+        o.active = false;
+      }
+    }
+    block_.DeactivateWeakPoints();
+    SolveBundle(solver, &block_);
+    const std::vector<Eigen::Vector2d> residuals = ImageResiduals(&block_);
+    for (size_t o = 0; o < block_.observations.size(); ++o) {
+      if (!block_.observations[o].active) continue;
+      if (!(residuals[o].norm() <= options_.max_reprojection_error_px)) {
+        block_.observations[o].active = false;
+        ++result_.num_observations_removed;
+      }
+    }
+    block_.DeactivateWeakPoints();
+    solver.loss = RobustLoss::kNone;
+    SolveBundle(solver, &block_);
+    PrecisionOptions precision_options;
+    precision_options.compute_residual_cofactors = false;
+    try {
+      const AdjustmentPrecision precision =
+          ComputePrecision(&block_, precision_options);
+      result_.sigma0_px = precision.sigma0;
+      result_.num_observations = precision.num_image_coordinates / 2;
+    } catch (const RunFailure& failure) {
+      LOG(WARNING) << "strip adjustment: no statistics: " << failure.what();
+    }
+    for (BlockImage& image : block_.images) {
+      image.rotation_fixed = false;
+      image.center_fixed = {false, false, false};
+    }
+  }
+
+  // ---------------------------------------------------------------- datum
+  void ApplyControl(const ControlData& control) {
+    DatumOptions datum = options_.datum;
+    if (datum.datum == DatumType::kAuto) {
+      int num_control = 0;
+      bool bar = false;
+      for (const ControlPoint& p : control.points) {
+        num_control += p.type == ControlPointType::kControl;
+      }
+      for (const DistanceObservation& d : control.distances) bar |= d.vertical;
+      datum.datum =
+          num_control < 3 && bar ? DatumType::kMinimum : DatumType::kControl;
+    }
+    result_.datum = SetUpDatum(control, datum, &block_);
+    result_.has_control = true;
+  }
+
+  // ----------------------------------------------------------------- model
+  void MakeModel() {
+    Scene& scene = result_.model;
+    std::map<int, bool> used_cameras;
+    for (const BlockImage& block_image : block_.images) {
+      used_cameras[block_image.camera_idx] = true;
+    }
+    for (const auto& [camera_idx, used] : used_cameras) {
+      scene.cameras.Set(colmap_cameras_[camera_idx].camera_id,
+                        colmap_cameras_[camera_idx]);
+    }
+    std::map<image_t, int> image_of;
+    for (const BlockImage& block_image : block_.images) {
+      const StripImage& source = images_[image_idxs_.at(block_image.image_id)];
+      Image image;
+      image.image_id = block_image.image_id;
+      image.name = block_image.name;
+      image.camera_id = source.row.camera_id;
+      image.cam_from_world = block_image.CamFromWorld();
+      image.points2D.resize(source.keypoints.rows());
+      for (Eigen::Index k = 0; k < source.keypoints.rows(); ++k) {
+        image.points2D[k].xy = KeypointXY(source.keypoints, k);
+      }
+      scene.images.Set(image.image_id, std::move(image));
+    }
+    std::vector<std::vector<TrackElement>> tracks(block_.points.size());
+    for (const BlockObservation& o : block_.observations) {
+      if (!o.active || block_.points[o.point_idx].kind != PointKind::kTie) {
+        continue;
+      }
+      tracks[o.point_idx].push_back(
+          {block_.images[o.image_idx].image_id, o.point2D_idx});
+    }
+    point3D_t next_id = 1;
+    for (size_t p = 0; p < block_.points.size(); ++p) {
+      const BlockPoint& block_point = block_.points[p];
+      if (block_point.kind != PointKind::kTie || !block_point.active ||
+          tracks[p].size() < 2) {
+        continue;
+      }
+      Point3D point;
+      point.xyz = block_point.xyz;
+      point.color = block_point.color;
+      point.track = tracks[p];
+      const point3D_t id = next_id++;
+      for (const TrackElement& e : point.track) {
+        scene.images.at(e.image_id).points2D.at(e.point2D_idx).point3D_id = id;
+      }
+      scene.points3D.Set(id, std::move(point));
+    }
+    scene.UpdateReprojectionErrors();
+  }
+
+  const std::string database_path_;
+  const std::string control_path_;
+  const StripOptions& options_;
+  StripResult result_;
+  std::vector<Camera> cameras_;         // as adjusted (BROWN_BEYER if known)
+  std::vector<Camera> colmap_cameras_;  // the database's rows
+  std::vector<StripImage> images_;      // in sequence order
+  std::map<image_t, int> image_idxs_;
+  std::map<std::pair<int, int>, TwoViewGeometry> geometries_;
+  std::vector<std::vector<std::pair<int, int>>> tracks_;
+  std::vector<std::optional<Eigen::Vector3d>> track_points_;
+  std::vector<std::unordered_map<int, int>> track_at_;  // keypoint -> track
+  std::vector<int> sequence_;  // placed images in the order of placing
+  AdjustmentBlock block_;
+};
+
+}  // namespace
+
+void StripOptions::Check() const {
+  CheckOption(max_gap >= 1, "StripOptions.max_gap", ">= 1", max_gap);
+  CheckOption(min_common_points >= 1,
+              "StripOptions.min_common_points",
+              ">= 1",
+              min_common_points);
+  CheckOption(min_intersection_angle_deg >= 0,
+              "StripOptions.min_intersection_angle_deg",
+              ">= 0",
+              min_intersection_angle_deg);
+  CheckOption(max_reprojection_error_px > 0,
+              "StripOptions.max_reprojection_error_px",
+              "> 0",
+              max_reprojection_error_px);
+  CheckOption(
+      image_sigma_px > 0, "StripOptions.image_sigma_px", "> 0", image_sigma_px);
+  datum.Check();
+}
+
+StripResult RunStrip(const std::string& database_path,
+                     const std::string& control_path,
+                     const StripOptions& options) {
+  options.Check();
+  return StripBuilder(database_path, control_path, options).Build();
+}
+
+std::string StripReportJson(const StripResult& result) {
+  using Json = nlohmann::ordered_json;
+  Json root;
+  root["format"] = "bayon-strip";
+  root["version"] = 1;
+  root["num_images"] = result.model.images.size();
+  root["num_points"] = result.model.points3D.size();
+  root["num_tracks"] = result.num_tracks;
+  root["unoriented_images"] = result.unoriented_images;
+  Json models = Json::array();
+  for (const StripModel& m : result.models) {
+    Json model = {{"images", {m.image1, m.image2}},
+                  {"connected", m.connected},
+                  {"num_matches", m.num_matches},
+                  {"num_points", m.num_points},
+                  {"num_common_points", m.num_common_points},
+                  {"scale", m.scale},
+                  {"scale_spread", m.scale_spread}};
+    if (!m.reason.empty()) model["reason"] = m.reason;
+    models.push_back(model);
+  }
+  root["models"] = models;
+  root["closed_ring"] = result.closed_ring;
+  if (result.closed_ring) {
+    root["closure"] = {
+        {"rotation_deg", result.closure_rotation_deg},
+        {"position_relative_to_path", result.closure_position_relative},
+        {"scale", result.closure_scale}};
+  }
+  root["strip_adjustment"] = {
+      {"sigma0_px", result.sigma0_px},
+      {"num_observations", result.num_observations},
+      {"num_observations_removed", result.num_observations_removed}};
+  if (result.has_control) {
+    const DatumSetup& datum = result.datum;
+    Json residuals = Json::array();
+    for (const SimilarityResidual& r : datum.similarity_residuals) {
+      residuals.push_back(
+          {{"name", r.name},
+           {"residual_m", {r.residual.x(), r.residual.y(), r.residual.z()}},
+           {"inlier", r.inlier}});
+    }
+    const Sim3d& sim = datum.object_from_model;
+    root["similarity"] = {
+        {"datum", DatumTypeName(datum.type)},
+        {"description", datum.description},
+        {"scale", sim.scale},
+        {"qvec",
+         {sim.rotation.w(),
+          sim.rotation.x(),
+          sim.rotation.y(),
+          sim.rotation.z()}},
+        {"tvec",
+         {sim.translation.x(), sim.translation.y(), sim.translation.z()}},
+        {"rms_m", datum.similarity_rms_m},
+        {"residuals", residuals},
+        {"notes", datum.notes}};
+  }
+  root["time_s"] = result.time_s;
+  return root.dump(2) + "\n";
+}
+
+}  // namespace bayon

@@ -1,0 +1,191 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/adjustment/strip.h"
+
+#include "ext/colmap/database.h"
+#include "ext/colmap/model_io.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/eval/sparse_eval.h"
+#include "ext/synth/workspace_writer.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <random>
+
+#include "tests/testing.h"
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+struct Workspace {
+  std::string path;
+  SyntheticTruth truth;
+};
+
+// 16 stations on a ring of 10 m around 900 points, with control.
+Workspace MakeWorkspace(const std::string& name,
+                        int num_control_points = 6,
+                        bool levelling_bar = false) {
+  Workspace ws;
+  ws.path = testing::TempDir(name) + "/ws";
+  PointsSceneOptions scene;
+  scene.num_points = 900;
+  scene.seed = 4;
+  ws.truth = SynthesizePointsScene(scene);
+  SyntheticControlOptions control;
+  control.num_control_points = num_control_points;
+  control.num_check_points = 2;
+  control.levelling_bar = levelling_bar;
+  SyntheticWorkspaceExtras extras;
+  extras.control = SynthesizeControl(ws.truth, scene, control);
+  WriteSyntheticWorkspace(ws.truth, ws.path, false, extras);
+  return ws;
+}
+
+// Turns every relative orientation by `angle_deg` about a random axis and
+// tilts its base, as a relative orientation from noisy points would be; with
+// `drop_pose` the pose columns are removed so that E must be decomposed.
+void DisturbRelativeOrientations(const std::string& database_path,
+                                 double angle_deg,
+                                 bool drop_pose) {
+  Database database(database_path, Database::Mode::kReadWrite);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0, 1);
+  auto transaction = database.BeginTransaction();
+  for (auto& [pair_id, geometry] : database.ReadAllTwoViewGeometries()) {
+    const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+    const Eigen::Vector3d axis =
+        Eigen::Vector3d(noise(rng), noise(rng), noise(rng)).normalized();
+    const Eigen::Quaterniond turn(
+        Eigen::AngleAxisd(angle_deg * M_PI / 180.0, axis));
+    const Eigen::Vector4d& q = *geometry.qvec;
+    const Eigen::Quaterniond rotation =
+        turn * Eigen::Quaterniond(q(0), q(1), q(2), q(3));
+    const Eigen::Vector3d t =
+        (*geometry.tvec +
+         0.5 * angle_deg * M_PI / 180.0 *
+             Eigen::Vector3d(noise(rng), noise(rng), noise(rng)))
+            .normalized();
+    Eigen::Matrix3d skew;
+    skew << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+    geometry.E = skew * rotation.toRotationMatrix();
+    if (drop_pose) {
+      geometry.qvec.reset();
+      geometry.tvec.reset();
+    } else {
+      geometry.qvec = Eigen::Vector4d(
+          rotation.w(), rotation.x(), rotation.y(), rotation.z());
+      geometry.tvec = t;
+    }
+    database.WriteTwoViewGeometry(id1, id2, geometry);
+  }
+  transaction.Commit();
+}
+
+TEST(Strip, ClosedRingWithControlIsCloseToTheTruth) {
+  const Workspace ws = MakeWorkspace("strip_ring");
+  DisturbRelativeOrientations(ws.path + "/database.db", 0.3, false);
+  StripOptions options;
+  options.num_threads = 1;
+  const StripResult result =
+      RunStrip(ws.path + "/database.db", ws.path + "/control", options);
+  EXPECT_EQ(result.model.images.size(), 16u);
+  EXPECT_TRUE(result.unoriented_images.empty());
+  EXPECT_TRUE(result.closed_ring);
+  // The disturbed orientations leave a closure error, which is reported.
+  EXPECT_GT(result.closure_rotation_deg, 0.05);
+  EXPECT_GT(result.model.points3D.size(), 800u);
+  ASSERT_TRUE(result.has_control);
+  EXPECT_EQ(result.datum.type, DatumType::kControl);
+  EXPECT_EQ(result.datum.similarity_residuals.size(), 6u);
+  // After the strip adjustment and the similarity, in the truth's system.
+  SparseEvaluationOptions evaluation_options;
+  evaluation_options.align = false;
+  const SparseEvaluation evaluation =
+      EvaluateSparse(result.model, ws.truth.scene, evaluation_options);
+  EXPECT_EQ(evaluation.num_registered, 16);
+  EXPECT_LT(evaluation.center_rms_relative, 0.005);
+  EXPECT_LT(evaluation.rotation_rms_deg, 0.1);
+  EXPECT_LT(result.sigma0_px, 0.5);
+  // 2D points are the database keypoints, tracks point at them.
+  Database database(ws.path + "/database.db", Database::Mode::kReadOnly);
+  for (const auto& [id, image] : result.model.images) {
+    EXPECT_EQ(static_cast<Eigen::Index>(image.points2D.size()),
+              database.ReadKeypoints(id).rows());
+  }
+  result.model.CheckConsistency("strip");
+}
+
+TEST(Strip, OpenStripFromEssentialMatricesInModelCoordinates) {
+  const Workspace ws = MakeWorkspace("strip_open");
+  DisturbRelativeOrientations(ws.path + "/database.db", 0.0, true);
+  StripOptions options;
+  options.ring = RingClosure::kOpen;
+  options.num_threads = 1;
+  const StripResult result = RunStrip(ws.path + "/database.db", "", options);
+  EXPECT_EQ(result.model.images.size(), 16u);
+  EXPECT_FALSE(result.closed_ring);
+  EXPECT_FALSE(result.has_control);
+  // Model coordinates: right up to a similarity.
+  const SparseEvaluation evaluation =
+      EvaluateSparse(result.model, ws.truth.scene);
+  EXPECT_LT(evaluation.center_rms_relative, 0.005);
+  EXPECT_LT(evaluation.rotation_rms_deg, 0.1);
+}
+
+TEST(Strip, MinimumDatumFromTheLevellingBar) {
+  const Workspace ws = MakeWorkspace("strip_bar", 2, true);
+  StripOptions options;
+  options.num_threads = 1;
+  // The bar's ends are control points too: auto would take the four.
+  options.datum.datum = DatumType::kMinimum;
+  const StripResult result =
+      RunStrip(ws.path + "/database.db", ws.path + "/control", options);
+  ASSERT_TRUE(result.has_control);
+  EXPECT_EQ(result.datum.type, DatumType::kMinimum);
+  SparseEvaluationOptions evaluation_options;
+  evaluation_options.align = false;
+  const SparseEvaluation evaluation =
+      EvaluateSparse(result.model, ws.truth.scene, evaluation_options);
+  EXPECT_LT(evaluation.center_rms_relative, 0.01);
+}
+
+TEST(Strip, BadInput) {
+  const Workspace ws = MakeWorkspace("strip_bad", 2);
+  StripOptions options;
+  options.num_threads = 1;
+  // Two control points cannot define the similarity.
+  try {
+    RunStrip(ws.path + "/database.db", ws.path + "/control", options);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("three control points"),
+              std::string::npos)
+        << error.what();
+  }
+  // A camera without calibration: COLMAP's default focal length and no
+  // bayon_calibration.
+  const std::string db = testing::TempDir("strip_bad_camera") + "/db.db";
+  fs::copy_file(ws.path + "/database.db", db);
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    database.connection()->Execute("DROP TABLE bayon_calibration");
+    Camera camera = database.ReadCamera(1);
+    camera.has_prior_focal_length = false;
+    database.UpdateCamera(camera);
+  }
+  try {
+    RunStrip(db, "", options);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("has no calibration"),
+              std::string::npos)
+        << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace bayon

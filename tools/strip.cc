@@ -1,0 +1,133 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/adjustment/strip.h"
+
+#include "ext/colmap/model_io.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+
+int RunStripCommand(int argc, char** argv) {
+  std::string database_path, output_path, control_path, log_path;
+  std::string ring = "auto", datum = "auto";
+  bool overwrite = false;
+  StripOptions options;
+  CommandLine command(
+      "strip",
+      "Approximations without any other tool: the relative orientations of "
+      "successive image pairs chained into a strip or closed ring with scale "
+      "transfer through common tie points, the tie points intersected, a "
+      "strip adjustment in model coordinates, then the 7-parameter "
+      "similarity to the control points. Writes a COLMAP model.");
+  CLI::App& app = command.app();
+  app.add_option("--database_path",
+                 database_path,
+                 "COLMAP database with keypoints and two-view geometries "
+                 "(read only)")
+      ->required();
+  app.add_option("--output_path",
+                 output_path,
+                 "Output model folder (e.g. sparse/initial)")
+      ->required();
+  app.add_option("--control_path",
+                 control_path,
+                 "control/ folder (points.txt, observations.txt, "
+                 "distances.txt); without it the model stays in model "
+                 "coordinates");
+  app.add_option("--overwrite", overwrite, "Replace an existing output folder");
+  app.add_option("--ring",
+                 ring,
+                 "auto (closed when the last image is related to the first), "
+                 "closed or open")
+      ->transform(CLI::IsMember({"auto", "closed", "open"}));
+  app.add_option("--datum",
+                 datum,
+                 "auto (control with 3+ control points, else the minimum "
+                 "datum with a vertical bar), control or minimum")
+      ->transform(CLI::IsMember({"auto", "control", "minimum"}));
+  app.add_option("--datum_point",
+                 options.datum.datum_point,
+                 "Minimum datum: the point that fixes the rotation about the "
+                 "vertical");
+  app.add_option("--max_gap",
+                 options.max_gap,
+                 "Bridge a missing model with an image up to this many places "
+                 "back");
+  app.add_option("--min_common_points",
+                 options.min_common_points,
+                 "Tie points two models must share for the scale transfer");
+  app.add_option("--image_sigma_px",
+                 options.image_sigma_px,
+                 "Precision of a keypoint, px");
+  app.add_option("--max_reprojection_error_px",
+                 options.max_reprojection_error_px,
+                 "Strip adjustment: observations above this are removed");
+  app.add_option(
+      "--adjust", options.adjust, "1: adjust the strip in model coordinates");
+  app.add_option("--num_threads", options.num_threads, "-1: all cores");
+  app.add_option(
+      "--log_path", log_path, "Log file (default <workspace>/logs/strip.log)");
+  if (!command.Parse(argc, argv)) return 0;
+
+  options.ring = ring == "closed" ? RingClosure::kClosed
+                 : ring == "open" ? RingClosure::kOpen
+                                  : RingClosure::kAuto;
+  options.datum.datum = datum == "control"   ? DatumType::kControl
+                        : datum == "minimum" ? DatumType::kMinimum
+                                             : DatumType::kAuto;
+  options.Check();
+  CheckOutputPath(output_path, overwrite);
+  if (log_path.empty()) {
+    const fs::path workspace =
+        fs::path(output_path).parent_path().parent_path();
+    log_path =
+        WorkspaceLogPath(workspace.empty() ? "." : workspace.string(), "strip");
+  }
+  command.StartLog(log_path);
+  const StripResult result = RunStrip(database_path, control_path, options);
+
+  OutputDirectory output(output_path, overwrite);
+  WriteModel(result.model, output.temp_path(), ModelFormat::kBinary);
+  WriteFileAtomically(output.File("strip.json"), StripReportJson(result));
+  output.Commit();
+
+  int connected = 0;
+  for (const StripModel& model : result.models) connected += model.connected;
+  command.PrintSummary(StrCat(
+      result.model.images.size(),
+      " images oriented (",
+      result.unoriented_images.size(),
+      " not), ",
+      connected,
+      " models, ",
+      result.model.points3D.size(),
+      " tie points",
+      result.closed_ring ? StrCat("; ring closure ",
+                                  result.closure_rotation_deg,
+                                  " deg, ",
+                                  100 * result.closure_position_relative,
+                                  " % of the path")
+                         : std::string("; open strip"),
+      "; strip adjustment sigma0 ",
+      result.sigma0_px,
+      " px",
+      result.has_control ? StrCat("; similarity to ",
+                                  DatumTypeName(result.datum.type),
+                                  ": RMS ",
+                                  1000 * result.datum.similarity_rms_m,
+                                  " mm")
+                         : std::string("; model coordinates (no control)"),
+      "; ",
+      result.time_s,
+      " s -> ",
+      output_path));
+  return result.model.images.size() >= 2 ? 0 : 1;
+}
+
+}  // namespace bayon
