@@ -6,6 +6,9 @@
 // input refused with one line, nothing written.
 #include "ext/colmap/ply_io.h"
 #include "ext/core/file_util.h"
+#include "ext/core/mesh_geometry.h"
+#include "ext/eval/mesh_distance.h"
+#include "ext/mesh/mesh_io.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -172,6 +175,199 @@ TEST(EditCommand, BadInput) {
                              "median",
                              dir + "/line.ply",
                              {out});
+}
+
+nlohmann::json ReadJson(const std::string& path) {
+  std::ifstream file(path);
+  return nlohmann::json::parse(file);
+}
+
+TEST(MeshCommand, CylinderMeshOfTheEditedTower) {
+  const std::string fixture = TowerCloud();
+  const std::string ws = testing::TempDir("mesh_tower");
+  fs::create_directories(ws + "/dense");
+  fs::create_directories(ws + "/mesh");
+  const testing::CommandResult edit =
+      testing::RunBayon({"edit",
+                         "--input_path",
+                         fixture + "/points.ply",
+                         "--output_path",
+                         ws + "/dense/points_edited.ply"});
+  ASSERT_EQ(edit.exit_code, 0) << edit.output;
+  const testing::CommandResult mesh =
+      testing::RunBayon({"mesh",
+                         "--input_path",
+                         ws + "/dense/points_edited.ply",
+                         "--output_path",
+                         ws + "/mesh/mesh.ply",
+                         "--method",
+                         "cylinder",
+                         "--report_path",
+                         ws + "/mesh/report.json"});
+  ASSERT_EQ(mesh.exit_code, 0) << mesh.output;
+  EXPECT_TRUE(fs::exists(ws + "/logs/mesh.log"));
+  const nlohmann::json report = ReadJson(ws + "/mesh/report.json");
+  // Closed around the axis: open only at top and bottom, manifold.
+  EXPECT_EQ(report["num_boundary_loops"].get<int>(), 2) << mesh.output;
+  EXPECT_EQ(report["num_non_manifold_edges"].get<int>(), 0);
+  EXPECT_EQ(report["num_non_manifold_vertices"].get<int>(), 0);
+  EXPECT_EQ(report["num_components"].get<int>(), 1);
+  EXPECT_GT(report["cylinder"]["num_seam_faces"].get<int>(), 20);
+
+  // Within the noise of the true surface both ways (sigma 2 mm per axis).
+  const TriangleMesh result = ReadMesh(ws + "/mesh/mesh.ply");
+  const TriangleMesh truth = ReadMesh(fixture + "/surface.ply");
+  MeshComparisonOptions compare;
+  compare.num_samples = 30000;
+  const MeshComparison c = CompareMeshes(result, truth, compare);
+  EXPECT_LT(c.mesh_to_truth.rms, 0.003);
+  EXPECT_LT(c.truth_to_mesh.rms, 0.003);
+
+  // The same mesh as OBJ and OFF.
+  for (const char* ext : {"obj", "off"}) {
+    const std::string path = ws + "/mesh/mesh." + ext;
+    const testing::CommandResult other =
+        testing::RunBayon({"mesh",
+                           "--input_path",
+                           ws + "/dense/points_edited.ply",
+                           "--output_path",
+                           path});
+    ASSERT_EQ(other.exit_code, 0) << other.output;
+    EXPECT_EQ(ReadMesh(path).NumFaces(), result.NumFaces()) << ext;
+  }
+}
+
+// A torus with true normals (and one without), shared by the tests of one
+// build.
+std::string TorusCloud() {
+  return testing::SharedFixture("edit_mesh_torus", [](const std::string& dir) {
+    for (const char* normals : {"1", "0"}) {
+      const testing::CommandResult result = testing::RunBayon(
+          {"synth_cloud",
+           "--shape",
+           "torus",
+           "--num_points",
+           "8000",
+           "--blunder_fraction",
+           "0",
+           "--with_normals",
+           normals,
+           "--output_path",
+           dir + (normals[0] == '1' ? "/normals.ply" : "/plain.ply"),
+           "--truth_path",
+           dir + "/surface" + normals + ".ply"});
+      ASSERT_EQ(result.exit_code, 0) << result.output;
+    }
+  });
+}
+
+TEST(MeshCommand, ThreeDimensionalMethodsAndColmapPoisson) {
+  const std::string fixture = TorusCloud();
+  const std::string dir = testing::TempDir("mesh_torus");
+  const TriangleMesh truth = ReadMesh(fixture + "/surface1.ply");
+  const std::vector<std::vector<std::string>> runs = {
+      {"advancing_front"},
+      {"greedy_projection"},
+      {"poisson", "--depth", "6"},
+      {"colmap_poisson", "--colmap_depth", "6", "--colmap_trim", "0"}};
+  for (const std::vector<std::string>& run : runs) {
+    const std::string out = dir + "/" + run[0] + ".ply";
+    std::vector<std::string> args = {"mesh",
+                                     "--input_path",
+                                     fixture + "/normals.ply",
+                                     "--output_path",
+                                     out,
+                                     "--method"};
+    args.insert(args.end(), run.begin(), run.end());
+    const testing::CommandResult result = testing::RunBayon(args);
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+    const TriangleMesh mesh = ReadMesh(out);
+    const MeshTopology t = ComputeMeshTopology(mesh);
+    EXPECT_TRUE(t.IsManifold()) << run[0];
+    MeshComparisonOptions compare;
+    compare.num_samples = 20000;
+    const MeshComparison c = CompareMeshes(mesh, truth, compare);
+    // The Poissons smooth a little at depth 6; the interpolating methods
+    // carry the 2 mm noise.
+    EXPECT_LT(c.mesh_to_truth.rms, 0.006) << run[0];
+    if (run[0] != "greedy_projection") {
+      EXPECT_LT(c.truth_to_mesh.rms, 0.006) << run[0];
+    }
+  }
+  // Normals estimated where the cloud has none.
+  const testing::CommandResult estimated =
+      testing::RunBayon({"mesh",
+                         "--input_path",
+                         fixture + "/plain.ply",
+                         "--output_path",
+                         dir + "/estimated.ply",
+                         "--method",
+                         "poisson",
+                         "--depth",
+                         "6"});
+  ASSERT_EQ(estimated.exit_code, 0) << estimated.output;
+  EXPECT_NE(estimated.output.find("normals estimated with PCL"),
+            std::string::npos);
+  EXPECT_TRUE(ComputeMeshTopology(ReadMesh(dir + "/estimated.ply")).IsClosed());
+}
+
+TEST(MeshCommand, BadInput) {
+  const std::string fixture = TorusCloud();
+  const std::string dir = testing::TempDir("mesh_bad");
+  const std::string out = dir + "/mesh.ply";
+  WritePointCloudPly(PointCloud(), dir + "/empty.ply");
+  ExpectRefusedWithoutOutput(
+      {"mesh", "--input_path", dir + "/empty.ply", "--output_path", out},
+      "empty.ply: the cloud has no points",
+      dir + "/empty.ply",
+      {out});
+  PointCloud line;
+  for (int i = 0; i < 100; ++i) line.positions.emplace_back(0, 0, 0.1 * i);
+  WritePointCloudPly(line, dir + "/line.ply");
+  for (const char* method : {"cylinder", "advancing_front", "poisson"}) {
+    ExpectRefusedWithoutOutput({"mesh",
+                                "--input_path",
+                                dir + "/line.ply",
+                                "--output_path",
+                                out,
+                                "--method",
+                                method},
+                               "line.ply: all 100 points lie on one line",
+                               dir + "/line.ply",
+                               {out});
+  }
+  WriteFileAtomically(dir + "/nan.ply",
+                      "ply\nformat ascii 1.0\nelement vertex 3\n"
+                      "property double x\nproperty double y\n"
+                      "property double z\nend_header\n0 0 0\n1 0 0\n"
+                      "0 1 -nan\n");
+  ExpectRefusedWithoutOutput(
+      {"mesh", "--input_path", dir + "/nan.ply", "--output_path", out},
+      "nan.ply: point 2 has a coordinate that is not a finite number",
+      dir + "/nan.ply",
+      {out});
+  // Poisson on a cloud without normals, estimation turned off.
+  ExpectRefusedWithoutOutput({"mesh",
+                              "--input_path",
+                              fixture + "/plain.ply",
+                              "--output_path",
+                              out,
+                              "--method",
+                              "poisson",
+                              "--estimate_normals",
+                              "0"},
+                             "plain.ply: poisson needs point normals and the "
+                             "cloud has none",
+                             fixture + "/plain.ply",
+                             {out});
+  ExpectRefusedWithoutOutput({"mesh",
+                              "--input_path",
+                              fixture + "/plain.ply",
+                              "--output_path",
+                              dir + "/mesh.stl"},
+                             "unknown mesh format",
+                             fixture + "/plain.ply",
+                             {dir + "/mesh.stl"});
 }
 
 }  // namespace

@@ -14,6 +14,7 @@ int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);
 int RunFeatures(int argc, char** argv);
 int RunEdit(int argc, char** argv);
+int RunMesh(int argc, char** argv);
 int RunSynthCloud(int argc, char** argv);
 int RunMatch(int argc, char** argv);
 

@@ -221,6 +221,11 @@ double RunRadius(const PointCloud& cloud,
 
 }  // namespace
 
+double MedianPointSpacing(const PointCloud& cloud) {
+  if (cloud.size() < 2) return 0;
+  return MedianSpacing(CenteredPclCloud(cloud.positions));
+}
+
 std::string CloudEditMethodName(CloudEditMethod method) {
   switch (method) {
     case CloudEditMethod::kSurfaceFit:

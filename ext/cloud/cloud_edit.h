@@ -137,6 +137,10 @@ PointCloud EditPointCloud(const PointCloud& cloud,
 std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
                                          const std::string& what);
 
+// The median distance from a point to its nearest neighbour, over up to
+// 20000 points spread evenly over the cloud (0 for fewer than 2 points).
+double MedianPointSpacing(const PointCloud& cloud);
+
 // Throws InputError naming `what` when the cloud has fewer than
 // `min_points` points, or all of them lie on one line (or coincide).
 void CheckCloudSpansSurface(const PointCloud& cloud,

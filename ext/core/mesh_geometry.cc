@@ -82,9 +82,10 @@ std::vector<std::vector<int>> FindBoundaryLoops(const TriangleMesh& mesh) {
   // Boundary halfedges as their faces run them: a consistently oriented
   // boundary then chains head to tail.
   std::vector<std::pair<int, int>> boundary;
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].lo == edges[i].lo &&
+  const int num_sides = static_cast<int>(edges.size());
+  for (int i = 0; i < num_sides;) {
+    int j = i;
+    while (j < num_sides && edges[j].lo == edges[i].lo &&
            edges[j].hi == edges[i].hi) {
       ++j;
     }
@@ -128,6 +129,66 @@ std::vector<std::vector<int>> FindBoundaryLoops(const TriangleMesh& mesh) {
   return loops;
 }
 
+std::vector<int> CornerFans(const TriangleMesh& mesh) {
+  const int num_faces = static_cast<int>(mesh.faces.size());
+  UnionFind corners(3 * mesh.faces.size());
+  const std::vector<FaceEdge> edges = SortedFaceEdges(mesh);
+  const int num_sides = static_cast<int>(edges.size());
+  for (int i = 0; i < num_sides;) {
+    int j = i;
+    while (j < num_sides && edges[j].lo == edges[i].lo &&
+           edges[j].hi == edges[i].hi) {
+      ++j;
+    }
+    if (j - i == 2) {
+      // The two faces belong to the same fan around both end points.
+      for (int v : {edges[i].lo, edges[i].hi}) {
+        corners.Union(CornerOf(mesh, edges[i].face, v),
+                      CornerOf(mesh, edges[i + 1].face, v));
+      }
+    }
+    i = j;
+  }
+  std::vector<int> fans(3 * mesh.faces.size(), -1);
+  for (int f = 0; f < num_faces; ++f) {
+    const Eigen::Vector3i& t = mesh.faces[f];
+    if (t(0) == t(1) || t(1) == t(2) || t(0) == t(2)) continue;
+    for (int k = 0; k < 3; ++k) {
+      fans[3 * f + k] = static_cast<int>(corners.Find(3 * f + k));
+    }
+  }
+  return fans;
+}
+
+size_t SplitNonManifoldVertices(TriangleMesh* mesh) {
+  const std::vector<int> fans = CornerFans(*mesh);
+  PointCloud& v = mesh->vertices;
+  const size_t n = v.size();
+  std::vector<int> first_fan(n, -1);
+  // For the second and later fans of a vertex, the copy that takes them.
+  std::unordered_map<int, int> copy_of_fan;
+  size_t num_copies = 0;
+  for (size_t c = 0; c < fans.size(); ++c) {
+    if (fans[c] < 0) continue;
+    int& vertex = mesh->faces[c / 3](c % 3);
+    if (first_fan[vertex] < 0) first_fan[vertex] = fans[c];
+    if (first_fan[vertex] == fans[c]) continue;
+    auto [it, inserted] = copy_of_fan.emplace(fans[c], -1);
+    if (inserted) {
+      it->second = static_cast<int>(v.positions.size());
+      v.positions.push_back(v.positions[vertex]);
+      if (v.HasNormals()) v.normals.push_back(v.normals[vertex]);
+      if (v.HasColors()) v.colors.push_back(v.colors[vertex]);
+      for (PointAttribute& a : v.attributes) {
+        a.values.push_back(a.values[vertex]);
+      }
+      ++num_copies;
+    }
+    vertex = it->second;
+  }
+  return num_copies;
+}
+
 MeshTopology ComputeMeshTopology(const TriangleMesh& mesh) {
   MeshTopology topology;
   const auto& positions = mesh.vertices.positions;
@@ -166,16 +227,16 @@ MeshTopology ComputeMeshTopology(const TriangleMesh& mesh) {
 
   const std::vector<FaceEdge> edges = SortedFaceEdges(mesh);
   UnionFind components(mesh.faces.size());
-  UnionFind corners(3 * mesh.faces.size());
   double edge_sum = 0;
   topology.shortest_edge = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].lo == edges[i].lo &&
+  const int num_sides = static_cast<int>(edges.size());
+  for (int i = 0; i < num_sides;) {
+    int j = i;
+    while (j < num_sides && edges[j].lo == edges[i].lo &&
            edges[j].hi == edges[i].hi) {
       ++j;
     }
-    const size_t count = j - i;
+    const int count = j - i;
     const FaceEdge& e = edges[i];
     ++topology.num_edges;
     const double length = (positions[e.lo] - positions[e.hi]).norm();
@@ -184,16 +245,11 @@ MeshTopology ComputeMeshTopology(const TriangleMesh& mesh) {
     topology.longest_edge = std::max(topology.longest_edge, length);
     if (count == 1) ++topology.num_boundary_edges;
     if (count > 2) ++topology.num_non_manifold_edges;
-    for (size_t k = i + 1; k < j; ++k) {
-      components.Union(edges[i].face, edges[k].face);
+    for (int k = i; k + 1 < j; ++k) {
+      components.Union(edges[k].face, edges[k + 1].face);
     }
-    if (count == 2) {
-      const FaceEdge& other = edges[i + 1];
-      if (e.forward == other.forward) ++topology.num_inconsistent_edges;
-      // The two faces belong to the same fan around both end points.
-      for (int v : {e.lo, e.hi}) {
-        corners.Union(CornerOf(mesh, e.face, v), CornerOf(mesh, other.face, v));
-      }
+    if (count == 2 && e.forward == edges[i + 1].forward) {
+      ++topology.num_inconsistent_edges;
     }
     i = j;
   }
@@ -203,22 +259,16 @@ MeshTopology ComputeMeshTopology(const TriangleMesh& mesh) {
     topology.shortest_edge = 0;
   }
 
-  std::vector<size_t> fan_root(positions.size(), SIZE_MAX);
+  const std::vector<int> fans = CornerFans(mesh);
+  std::vector<int> first_fan(positions.size(), -1);
   std::vector<bool> non_manifold(positions.size(), false);
-  for (int f = 0; f < num_faces; ++f) {
-    if (mesh.faces[f](0) == mesh.faces[f](1) ||
-        mesh.faces[f](1) == mesh.faces[f](2) ||
-        mesh.faces[f](0) == mesh.faces[f](2)) {
-      continue;
-    }
-    for (int k = 0; k < 3; ++k) {
-      const int v = mesh.faces[f](k);
-      const size_t root = corners.Find(3 * f + k);
-      if (fan_root[v] == SIZE_MAX) {
-        fan_root[v] = root;
-      } else if (fan_root[v] != root) {
-        non_manifold[v] = true;
-      }
+  for (int c = 0; c < 3 * num_faces; ++c) {
+    if (fans[c] < 0) continue;
+    const int v = mesh.faces[c / 3](c % 3);
+    if (first_fan[v] < 0) {
+      first_fan[v] = fans[c];
+    } else if (first_fan[v] != fans[c]) {
+      non_manifold[v] = true;
     }
   }
   topology.num_non_manifold_vertices =

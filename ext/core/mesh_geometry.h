@@ -54,6 +54,17 @@ struct MeshTopology {
 // Computes every field of MeshTopology in O(F log F).
 MeshTopology ComputeMeshTopology(const TriangleMesh& mesh);
 
+// A fan label for every face corner (index 3 * face + k): corners of one
+// vertex share a label when their faces are joined around the vertex by
+// edges with exactly two faces; -1 for faces that repeat a vertex. A vertex
+// whose corners carry more than one label is non-manifold.
+std::vector<int> CornerFans(const TriangleMesh& mesh);
+
+// Gives every fan after the first of a non-manifold vertex its own copy of
+// the vertex (with its normal, colour and attributes), so that the faces
+// stay and every vertex becomes manifold. Returns the number of copies.
+size_t SplitNonManifoldVertices(TriangleMesh* mesh);
+
 // The boundary loops as vertex sequences (each loop listed once, following
 // the boundary in the direction opposite to its face's edge).
 std::vector<std::vector<int>> FindBoundaryLoops(const TriangleMesh& mesh);

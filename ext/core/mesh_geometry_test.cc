@@ -83,6 +83,15 @@ TEST(MeshTopology, FindsNonManifoldAndInconsistentFaces) {
   EXPECT_EQ(t.num_non_manifold_vertices, 1u);
   EXPECT_EQ(t.num_components, 2u);
 
+  bowtie.vertices.AddAttribute("sx", PlyScalarType::kFloat, 0.5);
+  EXPECT_EQ(SplitNonManifoldVertices(&bowtie), 1u);
+  ASSERT_EQ(bowtie.NumVertices(), 6u);
+  EXPECT_EQ(bowtie.vertices.positions[5], bowtie.vertices.positions[0]);
+  EXPECT_EQ(bowtie.vertices.FindAttribute("sx")->values.size(), 6u);
+  t = ComputeMeshTopology(bowtie);
+  EXPECT_EQ(t.num_non_manifold_vertices, 0u);
+  EXPECT_EQ(t.num_faces, 2u);
+
   TriangleMesh flipped = Tetrahedron();
   std::swap(flipped.faces[3](0), flipped.faces[3](1));
   t = ComputeMeshTopology(flipped);

@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/mesh/mesh_cleanup.h"
+
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/core/mesh_geometry.h"
+#include "ext/mesh/mesh_io.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace bayon {
+namespace {
+
+// An n x n grid of unit squares in the plane z = 0, two triangles each,
+// counter-clockwise seen from +z.
+TriangleMesh Grid(int n, double offset_x = 0) {
+  TriangleMesh mesh;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      mesh.vertices.positions.emplace_back(offset_x + i, j, 0);
+    }
+  }
+  const int base = 0;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const int a = base + j * (n + 1) + i;
+      mesh.faces.emplace_back(a, a + 1, a + n + 2);
+      mesh.faces.emplace_back(a, a + n + 2, a + n + 1);
+    }
+  }
+  return mesh;
+}
+
+TEST(MeshCleanup, MergesDuplicatesAndOrientsFaces) {
+  TriangleMesh mesh = Grid(6);
+  mesh.vertices.normals.assign(mesh.NumVertices(), Eigen::Vector3f::UnitZ());
+  // A copy of vertex 8 used by one face, a repeated face, a face with a
+  // repeated vertex, and a flipped face.
+  mesh.vertices.positions.push_back(mesh.vertices.positions[8]);
+  mesh.vertices.normals.push_back(Eigen::Vector3f::UnitZ());
+  const int copy = static_cast<int>(mesh.NumVertices()) - 1;
+  for (Eigen::Vector3i& f : mesh.faces) {
+    if (f(0) == 8) {
+      f(0) = copy;
+      break;
+    }
+  }
+  mesh.faces.push_back(mesh.faces[3]);
+  mesh.faces.emplace_back(1, 1, 2);
+  std::swap(mesh.faces[10](1), mesh.faces[10](2));
+  MeshCleanupReport report;
+  const TriangleMesh clean = CleanupMesh(mesh, MeshCleanupOptions(), &report);
+  EXPECT_EQ(report.num_merged_vertices, 1u);
+  EXPECT_EQ(report.num_duplicate_faces, 1u);
+  EXPECT_EQ(report.num_repeated_vertex_faces, 1u);
+  EXPECT_EQ(report.num_flipped_faces, 1u);
+  EXPECT_EQ(clean.NumFaces(), 72u);
+  EXPECT_EQ(clean.NumVertices(), 49u);
+  const MeshTopology t = ComputeMeshTopology(clean);
+  EXPECT_EQ(t.num_inconsistent_edges, 0u);
+  EXPECT_EQ(t.num_boundary_loops, 1u);
+  for (size_t f = 0; f < clean.NumFaces(); ++f) {
+    EXPECT_GT(FaceNormal(clean, f).z(), 0.99);
+  }
+  ASSERT_TRUE(clean.vertices.HasNormals());
+}
+
+TEST(MeshCleanup, NonManifoldDegenerateAndSmallParts) {
+  TriangleMesh mesh = Grid(8);
+  const int n = static_cast<int>(mesh.NumVertices());
+  // A fin: a third face on an inner edge (0-10 runs across the first
+  // square's diagonal).
+  mesh.vertices.positions.emplace_back(0.5, 0.5, 1);
+  mesh.faces.emplace_back(0, 10, n);
+  // A needle: a zero-area face hanging off the border.
+  mesh.vertices.positions.emplace_back(4, -1, 0);
+  mesh.vertices.positions.emplace_back(4, -1 + 1e-9, 0);
+  mesh.faces.emplace_back(4, n + 2, n + 1);
+  // A small far-away piece of 2 faces.
+  TriangleMesh small = Grid(1, 100);
+  for (Eigen::Vector3i f : small.faces) {
+    mesh.faces.push_back(f.array() + static_cast<int>(mesh.NumVertices()));
+  }
+  mesh.vertices.positions.insert(mesh.vertices.positions.end(),
+                                 small.vertices.positions.begin(),
+                                 small.vertices.positions.end());
+  MeshCleanupReport report;
+  const TriangleMesh clean = CleanupMesh(mesh, MeshCleanupOptions(), &report);
+  EXPECT_EQ(report.num_non_manifold_faces, 1u);
+  EXPECT_EQ(report.num_degenerate_faces, 1u);
+  EXPECT_EQ(report.num_small_components, 1u);
+  EXPECT_EQ(report.num_small_component_faces, 2u);
+  const MeshTopology t = ComputeMeshTopology(clean);
+  EXPECT_TRUE(t.IsManifold());
+  EXPECT_EQ(t.num_faces, 128u);
+  EXPECT_EQ(t.num_degenerate_faces, 0u);
+  EXPECT_EQ(t.num_components, 1u);
+}
+
+TEST(MeshCleanup, FillsSmallHolesOnly) {
+  TriangleMesh mesh = Grid(10);
+  // Two holes: one square (2 faces) and a 3 x 3 block (18 faces).
+  std::vector<Eigen::Vector3i> kept;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const size_t square = f / 2, i = square % 10, j = square / 10;
+    const bool small_hole = i == 2 && j == 2;
+    const bool large_hole = i >= 5 && i <= 7 && j >= 5 && j <= 7;
+    if (!small_hole && !large_hole) kept.push_back(mesh.faces[f]);
+  }
+  mesh.faces = kept;
+  EXPECT_EQ(ComputeMeshTopology(mesh).num_boundary_loops, 3u);
+  MeshCleanupOptions options;
+  options.max_hole_edges = 6;
+  MeshCleanupReport report;
+  const TriangleMesh clean = CleanupMesh(mesh, options, &report);
+  EXPECT_EQ(report.num_holes_filled, 1u);
+  EXPECT_EQ(report.num_fill_faces, 2u);
+  const MeshTopology t = ComputeMeshTopology(clean);
+  EXPECT_EQ(t.num_boundary_loops, 2u);  // the border and the large hole
+  EXPECT_EQ(t.num_inconsistent_edges, 0u);
+  EXPECT_NEAR(t.area, 100 - 9, 1e-9);
+}
+
+TEST(MeshIo, PlyObjOffRoundTrip) {
+  const std::string dir = ::testing::TempDir() + "/bayon_mesh_io";
+  std::filesystem::create_directories(dir);
+  TriangleMesh mesh = Grid(3);
+  mesh.vertices.positions[5].z() = 0.123456789012;
+  for (const std::string ext : {".ply", ".obj", ".off", ".OBJ"}) {
+    const std::string path = dir + "/mesh" + ext;
+    WriteMesh(mesh, path);
+    const TriangleMesh back = ReadMesh(path);
+    ASSERT_EQ(back.NumFaces(), mesh.NumFaces()) << ext;
+    ASSERT_EQ(back.NumVertices(), mesh.NumVertices()) << ext;
+    // OpenMesh's OBJ and OFF exporters go through single precision.
+    EXPECT_NEAR(back.vertices.positions[5].z(),
+                0.123456789012,
+                ext == ".ply" ? 1e-15 : 1e-7)
+        << ext;
+    EXPECT_EQ(back.faces[4], mesh.faces[4]) << ext;
+  }
+  EXPECT_THROW(WriteMesh(mesh, dir + "/mesh.stl"), InputError);
+  WriteFileAtomically(dir + "/broken.off", "OFF\n3 1\n0 0 0\n");
+  EXPECT_THROW(ReadMesh(dir + "/broken.off"), InputError);
+  EXPECT_FALSE(IsMeshFormatSupported("a.xyz"));
+}
+
+}  // namespace
+}  // namespace bayon

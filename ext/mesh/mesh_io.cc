@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/mesh/mesh_io.h"
+
+#include "ext/colmap/ply_io.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/mesh/openmesh_types.h"
+
+#include <glog/logging.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+std::string LowerExtension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) {
+    return static_cast<char>(std::tolower(c));
+  });
+  return ext;
+}
+
+}  // namespace
+
+bool IsMeshFormatSupported(const std::string& path) {
+  const std::string ext = LowerExtension(path);
+  return ext == ".ply" || ext == ".obj" || ext == ".off";
+}
+
+void WriteMesh(const TriangleMesh& mesh, const std::string& path) {
+  const std::string ext = LowerExtension(path);
+  if (!IsMeshFormatSupported(path)) {
+    ThrowInputError(
+        path, ": unknown mesh format '", ext, "' (use .ply, .obj or .off)");
+  }
+  if (ext == ".ply") {
+    WriteMeshPly(mesh, path);
+    return;
+  }
+  double largest = 0;
+  for (const Eigen::Vector3d& p : mesh.vertices.positions) {
+    largest = std::max(largest, p.cwiseAbs().maxCoeff());
+  }
+  if (largest * 6e-8 > 1e-4) {
+    LOG(WARNING) << path << ": coordinates up to " << largest << " lose about "
+                 << largest * 6e-8 << " in OpenMesh's single-precision " << ext
+                 << " export; .ply keeps full precision";
+  }
+  OmMesh om;
+  const bool normals = mesh.vertices.HasNormals();
+  const bool colors = mesh.vertices.HasColors();
+  if (normals) om.request_vertex_normals();
+  if (colors) om.request_vertex_colors();
+  std::vector<OmMesh::VertexHandle> handles;
+  handles.reserve(mesh.NumVertices());
+  for (size_t i = 0; i < mesh.NumVertices(); ++i) {
+    const Eigen::Vector3d& p = mesh.vertices.positions[i];
+    const OmMesh::VertexHandle v =
+        om.add_vertex(OmMesh::Point(p.x(), p.y(), p.z()));
+    if (normals) {
+      const Eigen::Vector3f& n = mesh.vertices.normals[i];
+      om.set_normal(v, OmMesh::Normal(n.x(), n.y(), n.z()));
+    }
+    if (colors) {
+      const auto& c = mesh.vertices.colors[i];
+      om.set_color(v, OmMesh::Color(c(0), c(1), c(2)));
+    }
+    handles.push_back(v);
+  }
+  // OpenMesh's writers take any face list through its own structure, which
+  // refuses non-manifold faces: write those meshes as PLY.
+  const bool was_enabled = omerr().is_enabled();
+  omerr().disable();
+  size_t refused = 0;
+  for (const Eigen::Vector3i& f : mesh.faces) {
+    refused +=
+        !om.add_face(handles[f(0)], handles[f(1)], handles[f(2)]).is_valid();
+  }
+  if (was_enabled) omerr().enable();
+  if (refused > 0) {
+    ThrowInputError(path,
+                    ": ",
+                    refused,
+                    " faces are non-manifold and cannot be written as ",
+                    ext,
+                    "; write .ply or clean the mesh first");
+  }
+  OpenMesh::IO::Options io_options;
+  if (normals) io_options += OpenMesh::IO::Options::VertexNormal;
+  if (colors) io_options += OpenMesh::IO::Options::VertexColor;
+  // Full precision for the coordinates.
+  const std::string temp = path + TempSuffix() + ext;
+  TempFileGuard guard(temp);
+  if (!OpenMesh::IO::write_mesh(om, temp, io_options, 17)) {
+    throw RunFailure(StrCat(path, ": OpenMesh could not write the mesh"));
+  }
+  std::error_code error;
+  fs::rename(temp, path, error);
+  if (error) {
+    throw RunFailure(
+        StrCat(path, ": cannot rename ", temp, ": ", error.message()));
+  }
+  guard.Keep();
+}
+
+TriangleMesh ReadMesh(const std::string& path) {
+  const std::string ext = LowerExtension(path);
+  if (!IsMeshFormatSupported(path)) {
+    ThrowInputError(
+        path, ": unknown mesh format '", ext, "' (use .ply, .obj or .off)");
+  }
+  if (ext == ".ply") return ReadMeshPly(path);
+  CheckFileExists(path, "mesh");
+  OmMesh om;
+  om.request_vertex_normals();
+  om.request_vertex_colors();
+  OpenMesh::IO::Options io_options;
+  io_options += OpenMesh::IO::Options::VertexNormal;
+  io_options += OpenMesh::IO::Options::VertexColor;
+  if (!OpenMesh::IO::read_mesh(om, path, io_options)) {
+    ThrowInputError(path, ": not a readable ", ext, " mesh");
+  }
+  TriangleMesh mesh;
+  for (OmMesh::VertexHandle v : om.vertices()) {
+    const OmMesh::Point& p = om.point(v);
+    mesh.vertices.positions.emplace_back(p[0], p[1], p[2]);
+    if (io_options.vertex_has_normal()) {
+      const OmMesh::Normal& n = om.normal(v);
+      mesh.vertices.normals.emplace_back(n[0], n[1], n[2]);
+    }
+    if (io_options.vertex_has_color()) {
+      const OmMesh::Color& c = om.color(v);
+      mesh.vertices.colors.emplace_back(c[0], c[1], c[2]);
+    }
+  }
+  for (OmMesh::FaceHandle f : om.faces()) {
+    auto it = om.cfv_iter(f);
+    const int a = (*it++).idx(), b = (*it++).idx(), c = (*it).idx();
+    mesh.faces.emplace_back(a, b, c);
+  }
+  if (mesh.faces.empty()) ThrowInputError(path, ": the mesh has no faces");
+  mesh.Check(path);
+  return mesh;
+}
+
+}  // namespace bayon

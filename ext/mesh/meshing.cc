@@ -1,0 +1,225 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/mesh/meshing.h"
+
+#include "ext/cloud/cloud_edit.h"
+#include "ext/core/errors.h"
+#include "ext/core/progress.h"
+
+#include <glog/logging.h>
+
+#include <iomanip>
+#include <sstream>
+
+namespace bayon {
+
+std::string MeshMethodName(MeshMethod method) {
+  switch (method) {
+    case MeshMethod::kCylinder:
+      return "cylinder";
+    case MeshMethod::kGreedyProjection:
+      return "greedy_projection";
+    case MeshMethod::kPoisson:
+      return "poisson";
+    case MeshMethod::kAdvancingFront:
+      return "advancing_front";
+    case MeshMethod::kColmapPoisson:
+      return "colmap_poisson";
+  }
+  return "?";
+}
+
+MeshMethod ParseMeshMethod(const std::string& name) {
+  for (MeshMethod method : {MeshMethod::kCylinder,
+                            MeshMethod::kGreedyProjection,
+                            MeshMethod::kPoisson,
+                            MeshMethod::kAdvancingFront,
+                            MeshMethod::kColmapPoisson}) {
+    if (name == MeshMethodName(method)) return method;
+  }
+  ThrowInputError(
+      "--method must be one of cylinder, greedy_projection, "
+      "poisson, advancing_front, colmap_poisson (got '",
+      name,
+      "')");
+}
+
+void GreedyProjectionOptions::Check() const {
+  CheckOption(search_radius_factor > 1,
+              "--search_radius_factor",
+              "> 1",
+              search_radius_factor);
+  CheckOption(mu > 1, "--mu", "> 1", mu);
+  CheckOption(max_nearest_neighbors >= 10,
+              "--max_nearest_neighbors",
+              ">= 10",
+              max_nearest_neighbors);
+  CheckOption(min_angle_deg > 0 && min_angle_deg < 60,
+              "--gp_min_angle_deg",
+              "in (0, 60)",
+              min_angle_deg);
+  CheckOption(max_angle_deg > 60 && max_angle_deg < 180,
+              "--gp_max_angle_deg",
+              "in (60, 180)",
+              max_angle_deg);
+  CheckOption(max_surface_angle_deg > 0 && max_surface_angle_deg < 180,
+              "--max_surface_angle_deg",
+              "in (0, 180)",
+              max_surface_angle_deg);
+}
+
+void PoissonOptions::Check() const {
+  CheckOption(depth >= 4 && depth <= 14, "--depth", "in [4, 14]", depth);
+  CheckOption(
+      samples_per_node >= 1, "--samples_per_node", ">= 1", samples_per_node);
+  CheckOption(point_weight >= 0, "--point_weight", ">= 0", point_weight);
+  CheckOption(trim_distance_factor >= 0,
+              "--trim_distance_factor",
+              ">= 0 (0 = no trimming)",
+              trim_distance_factor);
+}
+
+void AdvancingFrontOptions::Check() const {
+  CheckOption(radius_ratio_bound > 0,
+              "--radius_ratio_bound",
+              "> 0",
+              radius_ratio_bound);
+  CheckOption(beta > 0 && beta < 1, "--beta", "in (0, 1)", beta);
+}
+
+void ColmapPoissonOptions::Check() const {
+  CheckOption(depth >= 4 && depth <= 14, "--colmap_depth", "in [4, 14]", depth);
+  CheckOption(point_weight >= 0, "--colmap_point_weight", ">= 0", point_weight);
+  CheckOption(trim >= 0, "--colmap_trim", ">= 0", trim);
+}
+
+void MeshOptions::Check() const {
+  colmap_poisson.Check();
+  cylinder.Check();
+  greedy_projection.Check();
+  poisson.Check();
+  advancing_front.Check();
+  normals.Check();
+  cleanup.Check();
+}
+
+std::string MeshReport::Summary() const {
+  std::ostringstream out;
+  out << std::setprecision(4);
+  out << MeshMethodName(method) << ": " << num_input_points << " points -> "
+      << topology.num_vertices << " vertices, " << topology.num_faces
+      << " faces; " << topology.num_boundary_loops << " boundary loops, "
+      << topology.num_non_manifold_edges << " non-manifold edges, "
+      << topology.num_non_manifold_vertices << " non-manifold vertices, "
+      << topology.num_components << " components, Euler characteristic "
+      << topology.euler_characteristic << "; edges mean " << topology.mean_edge
+      << " m, longest " << topology.longest_edge << " m (point spacing "
+      << median_spacing << " m)";
+  if (normals_estimated) out << "\n  normals estimated with PCL";
+  if (method == MeshMethod::kCylinder) {
+    out << "\n  cylinder: axis through (" << cylinder.axis_point.transpose()
+        << ") along (" << cylinder.axis_direction.transpose()
+        << "), mean radius " << cylinder.mean_radius << " m; "
+        << cylinder.num_faces_once << " plane triangles, "
+        << cylinder.num_seam_faces << " across the seam, "
+        << cylinder.num_seam_unsafe << " with circumcircles beyond the seam "
+        << "band, " << cylinder.num_long_removed << " too long and "
+        << cylinder.num_degenerate_removed << " degenerate removed";
+    if (cylinder.num_on_axis > 0) {
+      out << ", " << cylinder.num_on_axis << " points on the axis skipped";
+    }
+  }
+  if (method == MeshMethod::kPoisson) {
+    out << "\n  poisson: " << num_trimmed_faces
+        << " faces trimmed far from the points";
+  }
+  out << "\n  cleanup: " << num_raw_faces << " raw faces; "
+      << cleanup.num_merged_vertices << " vertices merged, "
+      << cleanup.num_repeated_vertex_faces + cleanup.num_duplicate_faces
+      << " repeated faces, " << cleanup.num_flipped_faces << " flipped, "
+      << cleanup.num_non_manifold_faces << " non-manifold, "
+      << cleanup.num_degenerate_faces << " degenerate, "
+      << cleanup.num_small_component_faces << " in "
+      << cleanup.num_small_components << " small components removed, "
+      << cleanup.num_holes_filled << " holes filled (" << cleanup.num_fill_faces
+      << " faces)";
+  out << std::fixed << std::setprecision(2) << "\n  time: normals "
+      << seconds_normals << " s, " << MeshMethodName(method) << " "
+      << seconds_method << " s, cleanup " << seconds_cleanup << " s";
+  return out.str();
+}
+
+TriangleMesh MeshPointCloud(const PointCloud& input,
+                            const MeshOptions& options,
+                            MeshReport* report,
+                            const std::string& what) {
+  options.Check();
+  CheckCloudSpansSurface(input, 10, what);
+  *report = MeshReport();
+  report->method = options.method;
+  report->num_input_points = input.size();
+  report->median_spacing = MedianPointSpacing(input);
+
+  const bool needs_normals = options.method == MeshMethod::kGreedyProjection ||
+                             options.method == MeshMethod::kPoisson ||
+                             options.method == MeshMethod::kColmapPoisson;
+  PointCloud cloud = input;
+  if (needs_normals && !cloud.HasNormals()) {
+    if (!options.estimate_normals) {
+      ThrowInputError(what,
+                      ": ",
+                      MeshMethodName(options.method),
+                      " needs point normals and the cloud has none (let "
+                      "bayon estimate them with --estimate_normals 1)");
+    }
+    const Timer timer;
+    NormalEstimationOptions normal_options = options.normals;
+    normal_options.num_threads = options.num_threads;
+    EstimateNormals(normal_options, &cloud);
+    report->normals_estimated = true;
+    report->seconds_normals = timer.Seconds();
+  }
+
+  const Timer method_timer;
+  TriangleMesh raw;
+  switch (options.method) {
+    case MeshMethod::kCylinder:
+      raw = CylinderDelaunayMesh(
+          cloud, options.cylinder, options.num_threads, &report->cylinder);
+      break;
+    case MeshMethod::kGreedyProjection:
+      raw = GreedyProjectionMesh(
+          cloud, options.greedy_projection, report->median_spacing);
+      break;
+    case MeshMethod::kPoisson:
+      raw = PoissonMesh(cloud,
+                        options.poisson,
+                        report->median_spacing,
+                        options.num_threads,
+                        &report->num_trimmed_faces);
+      break;
+    case MeshMethod::kAdvancingFront:
+      raw = AdvancingFrontMesh(cloud, options.advancing_front);
+      break;
+    case MeshMethod::kColmapPoisson:
+      raw =
+          ColmapPoissonMesh(cloud, options.colmap_poisson, options.num_threads);
+      break;
+  }
+  report->seconds_method = method_timer.Seconds();
+  report->num_raw_faces = raw.NumFaces();
+  if (raw.faces.empty()) {
+    throw RunFailure(StrCat(
+        what, ": ", MeshMethodName(options.method), " produced no triangles"));
+  }
+
+  const Timer cleanup_timer;
+  TriangleMesh mesh = CleanupMesh(raw, options.cleanup, &report->cleanup);
+  report->seconds_cleanup = cleanup_timer.Seconds();
+  if (mesh.faces.empty()) {
+    throw RunFailure(StrCat(what, ": no triangles survived the cleanup"));
+  }
+  report->topology = ComputeMeshTopology(mesh);
+  return mesh;
+}
+
+}  // namespace bayon
