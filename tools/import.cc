@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/colmap/bayon_tables.h"
 #include "ext/colmap/database.h"
-#include "ext/core/camera_conversion.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
@@ -199,22 +198,8 @@ int RunImport(int argc, char** argv) {
       if (database.ReadImageWithName(fact.name)) continue;  // added meanwhile
       camera_t camera_id = shared_camera_id;
       if (camera_id == kInvalidCameraId) {
-        Camera camera = MakeCamera(options, fact);
-        CalibrationRecord calibration;
-        if (camera.model_id == CameraModelId::kBrownBeyer) {
-          // COLMAP gets the closest COLMAP model; bayon keeps the full one.
-          calibration.camera = camera;
-          const CameraConversion conversion =
-              ConvertCamera(camera, kColmapModelForBrownBeyer);
-          calibration.colmap_fit_rms_px = conversion.rms_residual_px;
-          calibration.colmap_fit_max_px = conversion.max_residual_px;
-          camera = conversion.camera;
-        }
-        camera_id = database.WriteCamera(camera);
-        if (calibration.camera.model_id == CameraModelId::kBrownBeyer) {
-          calibration.camera.camera_id = camera_id;
-          WriteCalibration(&database, calibration);
-        }
+        const Camera camera = MakeCamera(options, fact);
+        camera_id = WriteCameraWithCalibration(&database, camera);
         ++num_cameras;
         num_priors += camera.has_prior_focal_length;
         if (options.single_camera) shared_camera_id = camera_id;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/colmap/bayon_tables.h"
 
+#include "ext/core/camera_conversion.h"
 #include "ext/core/errors.h"
 
 #include <cstring>
@@ -115,6 +116,26 @@ void WriteBayonMeta(Database* database,
 }
 
 // ------------------------------------------------------------ calibration
+
+camera_t WriteCameraWithCalibration(Database* database,
+                                    const Camera& camera,
+                                    bool use_camera_id) {
+  if (camera.model_id != CameraModelId::kBrownBeyer) {
+    return database->WriteCamera(camera, use_camera_id);
+  }
+  // COLMAP gets the closest COLMAP model; bayon keeps the full one.
+  CalibrationRecord calibration;
+  calibration.camera = camera;
+  const CameraConversion conversion =
+      ConvertCamera(camera, kColmapModelForBrownBeyer);
+  calibration.colmap_fit_rms_px = conversion.rms_residual_px;
+  calibration.colmap_fit_max_px = conversion.max_residual_px;
+  const camera_t camera_id =
+      database->WriteCamera(conversion.camera, use_camera_id);
+  calibration.camera.camera_id = camera_id;
+  WriteCalibration(database, calibration);
+  return camera_id;
+}
 
 void WriteCalibration(Database* database, const CalibrationRecord& record) {
   EnsureBayonTable(database, kCalibrationTable);

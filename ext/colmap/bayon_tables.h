@@ -58,6 +58,14 @@ struct CalibrationRecord {
 };
 extern const BayonTable kCalibrationTable;
 void WriteCalibration(Database* database, const CalibrationRecord& record);
+// Adds a camera as `bayon import` does: a COLMAP model goes to `cameras`
+// as it is; a BROWN_BEYER camera goes to `cameras` as its FULL_OPENCV fit
+// (kColmapModelForBrownBeyer) and to bayon_calibration in full, with the
+// fit residual. Returns the new camera_id (the camera's own id when
+// `use_camera_id`).
+camera_t WriteCameraWithCalibration(Database* database,
+                                    const Camera& camera,
+                                    bool use_camera_id = false);
 std::optional<CalibrationRecord> ReadCalibration(Database* database,
                                                  camera_t camera_id);
 std::map<camera_t, CalibrationRecord> ReadAllCalibrations(Database* database);

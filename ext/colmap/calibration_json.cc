@@ -10,6 +10,16 @@
 
 namespace bayon {
 
+CalibrationEntry CalibrationEntryFromConversion(
+    const SceneCameraConversion& conversion) {
+  CalibrationEntry entry;
+  entry.camera = conversion.source;
+  entry.colmap_camera = conversion.conversion.camera;
+  entry.colmap_fit_rms_px = conversion.conversion.rms_residual_px;
+  entry.colmap_fit_max_px = conversion.conversion.max_residual_px;
+  return entry;
+}
+
 std::vector<std::string> ParameterNames(CameraModelId model_id) {
   std::vector<std::string> names;
   std::istringstream stream(CameraModelInfoFor(model_id).params_info);

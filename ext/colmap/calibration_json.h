@@ -18,6 +18,7 @@
 #pragma once
 
 #include "ext/core/camera.h"
+#include "ext/core/camera_conversion.h"
 
 #include <map>
 #include <optional>
@@ -34,6 +35,11 @@ struct CalibrationEntry {
   double colmap_fit_rms_px = 0;
   double colmap_fit_max_px = 0;
 };
+
+// The entry of a camera converted for COLMAP (ConvertSceneCamerasToColmap):
+// the original camera with its COLMAP fit and the fit residual.
+CalibrationEntry CalibrationEntryFromConversion(
+    const SceneCameraConversion& conversion);
 
 // Parameter names of a model, in order ("c", "x0", ... or "f", "cx", ...).
 std::vector<std::string> ParameterNames(CameraModelId model_id);

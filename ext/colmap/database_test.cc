@@ -175,6 +175,26 @@ TEST(BayonTables, CascadeWithImagesAndKeepUserVersion) {
   EXPECT_EQ(db.UserVersion(), 3800);
 }
 
+TEST(BayonTables, BrownBeyerCameraGoesToCamerasAsItsFit) {
+  const std::string dir = testing::TempDir("bayon_tables_fit");
+  Database db(dir + "/db.db", Database::Mode::kCreate);
+  Camera camera =
+      Camera::Create(CameraModelId::kBrownBeyer, 1750, 1800, 1200, 0.02);
+  camera.params[brown::kK1] = -3e-5;
+  camera.params[brown::kB2] = 1e-4;  // shear: FULL_OPENCV cannot hold it
+  const camera_t camera_id = WriteCameraWithCalibration(&db, camera);
+  EXPECT_EQ(db.ReadCamera(camera_id).model_id, CameraModelId::kFullOpenCV);
+  const auto calibration = ReadCalibration(&db, camera_id);
+  ASSERT_TRUE(calibration);
+  EXPECT_EQ(calibration->camera.params, camera.params);
+  EXPECT_GT(calibration->colmap_fit_max_px, 0.0);
+  EXPECT_LT(calibration->colmap_fit_max_px, 1.0);
+  // A COLMAP model is written as it is, without a calibration row.
+  const camera_t colmap_id = WriteCameraWithCalibration(&db, TestCamera());
+  EXPECT_EQ(db.ReadCamera(colmap_id).params, TestCamera().params);
+  EXPECT_FALSE(ReadCalibration(&db, colmap_id));
+}
+
 TEST(BayonTables, RefusesNewerBayonSchema) {
   const std::string dir = testing::TempDir("bayon_tables_newer");
   Database db(dir + "/db.db", Database::Mode::kCreate);

@@ -51,11 +51,7 @@ SyntheticWorkspaceSummary WriteSyntheticWorkspace(
 
   std::vector<CalibrationEntry> calibration;
   for (const SceneCameraConversion& conversion : conversions) {
-    CalibrationEntry entry;
-    entry.camera = conversion.source;
-    entry.colmap_camera = conversion.conversion.camera;
-    entry.colmap_fit_rms_px = conversion.conversion.rms_residual_px;
-    entry.colmap_fit_max_px = conversion.conversion.max_residual_px;
+    const CalibrationEntry entry = CalibrationEntryFromConversion(conversion);
     summary.colmap_fit_rms_px =
         std::max(summary.colmap_fit_rms_px, entry.colmap_fit_rms_px);
     summary.colmap_fit_max_px =
