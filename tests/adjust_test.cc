@@ -321,6 +321,47 @@ TEST(Adjust, StockColmapModelWithControl) {
   EXPECT_LT(report["check_points"]["rms_3d_mm"].get<double>(), 10.0);
 }
 
+// A "Bundle Adjustment in the Large" problem through import_bal, adjusted in
+// its own camera model (the benchmark's set-up, a few iterations).
+TEST(Adjust, BalProblem) {
+  BAYON_REQUIRE_DATA("bundle/ladybug-49-7776");
+  const std::string dir = testing::TempDir("adjust_bal");
+  RunOk({"import_bal",
+         "--input_path",
+         testing::DataPath("bundle/ladybug-49-7776/problem-49-7776-pre.txt"),
+         "--output_path",
+         dir + "/ws"});
+  const Scene scene = ReadModel(dir + "/ws/sparse/0");
+  EXPECT_EQ(scene.images.size(), 49u);
+  EXPECT_EQ(scene.points3D.size(), 7776u);
+  RunOk({"adjust",
+         "--database_path",
+         dir + "/ws/database.db",
+         "--input_path",
+         dir + "/ws/sparse/0",
+         "--output_path",
+         dir + "/adjusted",
+         "--camera_model",
+         "colmap",
+         "--self_calibration",
+         "all",
+         "--two_steps",
+         "0",
+         "--blunder_detection",
+         "none",
+         "--max_num_iterations",
+         "10",
+         "--log_path",
+         dir + "/log"});
+  const nlohmann::json report = ReadJson(dir + "/adjusted/adjustment.json");
+  // 31843 observations, 31 of them of points behind their camera.
+  EXPECT_EQ(report["statistics"]["n"].get<int>(), 2 * (31843 - 31));
+  EXPECT_EQ(report["statistics"]["d"].get<int>(), 7);
+  // Far below the imported model's 4.9 px after ten iterations.
+  EXPECT_LT(report["statistics"]["mean_reprojection_error_px"].get<double>(),
+            1.0);
+}
+
 // Bad input: one line naming the problem, exit code 2, nothing written.
 class AdjustBadInput : public ::testing::Test {
  protected:

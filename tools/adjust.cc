@@ -8,6 +8,7 @@
 #include "tools/commands.h"
 
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -158,8 +159,11 @@ int RunAdjust(int argc, char** argv) {
   WriteAdjustmentOutputs(outputs, output_path, overwrite);
 
   const AdjustmentPrecision& p = result.precision;
+  // Parameter names once each, however many cameras share them.
   std::string parameters;
+  std::set<std::string> seen;
   for (const ParameterEstimate& e : result.final_parameters) {
+    if (!seen.insert(e.name).second) continue;
     parameters += (parameters.empty() ? "" : ",") + e.name;
   }
   command.PrintSummary(StrCat(
@@ -178,7 +182,9 @@ int RunAdjust(int argc, char** argv) {
       p.sigma0,
       " px; parameters ",
       parameters.empty() ? "none" : parameters,
-      "; ",
+      " (",
+      input.block.cameras.size(),
+      input.block.cameras.size() == 1 ? " camera); " : " cameras); ",
       result.rejected.size(),
       " observations rejected",
       outputs.check_rms_m > 0

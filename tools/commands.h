@@ -9,6 +9,7 @@ namespace bayon {
 int RunAdjust(int argc, char** argv);
 int RunStripCommand(int argc, char** argv);
 int RunImport(int argc, char** argv);
+int RunImportBal(int argc, char** argv);
 int RunModelConverter(int argc, char** argv);
 int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);

@@ -112,6 +112,7 @@ class Adjuster {
       SetCameraParametersFree(true);
       Solve("step 2: with self-calibration", robust);
     }
+    if (robust) RejectAfterRobustSolution();
     if (options_.blunder_detection != BlunderDetection::kNone) {
       Snoop();
     } else if (robust) {
@@ -123,8 +124,15 @@ class Adjuster {
     if (block_->free_network) TransformToInnerConstraintDatum();
     PrecisionOptions precision_options;
     precision_options.inner_constraints = block_->free_network;
+    Timer statistics_timer;
     result_.precision = ComputePrecision(block_, precision_options);
     CollectParameters();
+    AdjustmentStep statistics;
+    statistics.name = "statistics (inverse of the normal equations)";
+    statistics.sigma0 = result_.precision.sigma0;
+    statistics.time_s = statistics_timer.Seconds();
+    result_.steps.push_back(statistics);
+    LOG(INFO) << statistics.name << ": " << statistics.time_s << " s";
     result_.total_time_s = timer.Seconds();
     return std::move(result_);
   }
@@ -209,6 +217,53 @@ class Adjuster {
     Solve("data snooping: last solution", false);
     LOG(WARNING) << "data snooping stopped after "
                  << options_.max_snooping_iterations << " iterations";
+  }
+
+  // The robust solution has down-weighted the blunders, so that the good
+  // observations of a track keep small residuals: every observation whose
+  // normalised residual, against a robust sigma0 (1.4826 x the median of the
+  // standardised residuals), exceeds twice the critical value is a gross
+  // error and rejected at once. Data snooping then decides the rest with
+  // least squares, one observation per point and iteration.
+  void RejectAfterRobustSolution() {
+    PrecisionOptions precision_options;
+    const AdjustmentPrecision precision =
+        ComputePrecision(block_, precision_options);
+    std::vector<double> standardised;
+    for (const ObservationStatistics& stats : precision.observations) {
+      if (!stats.valid) continue;
+      for (int k = 0; k < 2; ++k) {
+        standardised.push_back(std::abs(stats.normalized(k)));
+      }
+    }
+    if (standardised.empty()) return;
+    const size_t mid = standardised.size() / 2;
+    std::nth_element(
+        standardised.begin(), standardised.begin() + mid, standardised.end());
+    // normalized = z / sigma0: the median of |normalized| in units of the
+    // least-squares sigma0 of the robust solution.
+    const double robust_scale = 1.4826 * standardised[mid];
+    if (!(robust_scale > 0)) return;
+    int count = 0;
+    for (size_t o = 0; o < block_->observations.size(); ++o) {
+      const ObservationStatistics& stats = precision.observations[o];
+      if (!stats.valid) continue;
+      const double w = stats.normalized.cwiseAbs().maxCoeff() / robust_scale;
+      if (w <= 2 * options_.snooping_critical_value) continue;
+      block_->observations[o].active = false;
+      RejectedObservation rejected;
+      rejected.observation_idx = static_cast<int>(o);
+      rejected.residual_px = stats.residual_px;
+      rejected.w = w;
+      rejected.redundancy = stats.redundancy.minCoeff();
+      rejected.iteration = 0;
+      result_.rejected.push_back(rejected);
+      ++count;
+    }
+    result_.num_points_removed += block_->DeactivateWeakPoints();
+    LOG(INFO) << "robust solution: sigma0 " << precision.sigma0
+              << " px, robust sigma0 " << robust_scale * precision.sigma0
+              << " px, " << count << " observations rejected";
   }
 
   // Stepwise removal of the least significant additional parameter.

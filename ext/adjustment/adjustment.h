@@ -93,7 +93,7 @@ struct RejectedObservation {
   Eigen::Vector2d residual_px = Eigen::Vector2d::Zero();
   double w = 0;  // largest |normalised residual| of x and y
   double redundancy = 0;
-  int iteration = 0;
+  int iteration = 0;  // 0: after the robust solution, 1...: data snooping
 };
 
 struct CorrelationFlag {

@@ -229,10 +229,12 @@ class ReportBuilder {
     // Image residuals.
     Eigen::Vector2d sum_sq = Eigen::Vector2d::Zero();
     double max_residual = 0, sum_redundancy = 0, min_redundancy = 1;
+    double sum_norm = 0;
     int count = 0;
     for (const ObservationStatistics& s : p.observations) {
       if (!s.valid) continue;
       sum_sq += s.residual_px.cwiseAbs2();
+      sum_norm += s.residual_px.norm();
       max_residual = std::max(max_residual, s.residual_px.norm());
       sum_redundancy += s.redundancy.sum();
       min_redundancy = std::min(min_redundancy, s.redundancy.minCoeff());
@@ -242,6 +244,8 @@ class ReportBuilder {
       json["residual_rms_px"] = {std::sqrt(sum_sq.x() / count),
                                  std::sqrt(sum_sq.y() / count)};
       json["residual_max_px"] = max_residual;
+      // COLMAP's figure (model_analyzer's "mean reprojection error").
+      json["mean_reprojection_error_px"] = sum_norm / count;
       json["redundancy_number_mean"] = sum_redundancy / (2.0 * count);
       json["redundancy_number_min"] = min_redundancy;
     }
@@ -539,6 +543,11 @@ std::string Printout(const Json& r) {
                     res["inlier"].get<bool>() ? "" : "   SUSPECT");
     }
   }
+  if (r["datum"]["type"] == "free") {
+    out +=
+        " note: a free network keeps the input model's units; figures in "
+        "mm are 1/1000 of them\n";
+  }
   for (const Json& note : r["notes"]) {
     out += " note: " + note.get<std::string>() + "\n";
   }
@@ -596,6 +605,8 @@ std::string Printout(const Json& r) {
         s["residual_rms_px"][0].get<double>(),
         s["residual_rms_px"][1].get<double>(),
         s["residual_max_px"].get<double>());
+    out += Printf("   mean reprojection error (COLMAP's)       %8.4f px\n",
+                  s["mean_reprojection_error_px"].get<double>());
     out += Printf("   redundancy numbers, mean / min           %8.3f / %.3f\n",
                   s["redundancy_number_mean"].get<double>(),
                   s["redundancy_number_min"].get<double>());

@@ -136,9 +136,14 @@ BundleSolverSummary SolveBundle(const BundleSolverOptions& options,
   }
 
   ceres::Solver::Options solver_options;
+  // The reduced camera system is dense for small blocks (every image sees
+  // most others); a sparse factorisation pays off only for larger ones.
+  constexpr size_t kMaxImagesForDenseSchur = 50;
   solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
-  if (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) &&
-      !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE)) {
+  if (block->images.size() <= kMaxImagesForDenseSchur ||
+      (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) &&
+       !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(
+           ceres::EIGEN_SPARSE))) {
     solver_options.linear_solver_type = ceres::DENSE_SCHUR;
   }
   if (point_blocks.empty() || point_blocks.size() == all_blocks.size()) {

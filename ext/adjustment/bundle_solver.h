@@ -17,10 +17,12 @@ enum class RobustLoss { kNone, kHuber, kCauchy };
 
 struct BundleSolverOptions {
   int max_num_iterations = 100;
-  // Relative decrease of the cost at which the iteration stops.
-  double function_tolerance = 1e-10;
-  double gradient_tolerance = 1e-12;
-  double parameter_tolerance = 1e-10;
+  // Relative decrease of the cost, and relative change of the parameters,
+  // at which the iteration stops (Ceres's defaults: far below what the
+  // statistics can resolve).
+  double function_tolerance = 1e-6;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
   // Robust loss on the image observations (not on control points and
   // distances), for a first solution with blunders in the data. Its scale
   // is `loss_scale` reference standard deviations (sigma0_px of the block).

@@ -46,6 +46,9 @@ struct PointSystem {
   std::map<int, Eigen::MatrixXd> N_kept;
   // M_j = N_bj N_jj^-1, per kept block.
   std::map<int, Eigen::MatrixXd> M;
+  // Cofactors in the datum of the solution: Q_jj and Q_bj per kept block.
+  Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();
+  std::map<int, Eigen::MatrixXd> Q_kept;
 };
 
 // Pseudo-inverse of a small symmetric positive semi-definite matrix,
@@ -104,6 +107,7 @@ class PrecisionComputer {
     EvaluateJacobians();
     AccumulateNormalEquations();
     InvertReducedSystem();
+    RecoverPointCofactors();
     CountAndSigma0();
     if (options_.inner_constraints) ComputeInnerConstraintTransform();
     ExtractCovariances();
@@ -567,9 +571,9 @@ class PrecisionComputer {
         } else if (a_point && b_point) {
           Q_ab = MinimalPointCofactor(*point);
         } else if (!a_point) {
-          Q_ab = KeptPointCofactor(pa, *point);
+          Q_ab = KeptPointCofactor(jacobian.blocks[a], *point);
         } else {
-          Q_ab = KeptPointCofactor(pb, *point).transpose();
+          Q_ab = KeptPointCofactor(jacobian.blocks[b], *point).transpose();
         }
         Q.block(row, col, pa.size, pb.size) = Q_ab;
         col += pb.size;
@@ -579,28 +583,35 @@ class PrecisionComputer {
     return Q;
   }
 
-  Eigen::Matrix3d MinimalPointCofactor(const PointSystem& point) const {
-    Eigen::Matrix3d Q = point.N_inverse;
-    for (const auto& [a, M_a] : point.M) {
-      const ParamBlock& pa = params_[a];
+  // Q_jj = N_jj^-1 + M_j^T Q_kk M_j and Q_bj = -sum_c Q_bc M_c, once per
+  // point (every observation of the point needs them).
+  void RecoverPointCofactors() {
+    for (PointSystem& point : points_) {
+      point.Q = point.N_inverse;
       for (const auto& [b, M_b] : point.M) {
         const ParamBlock& pb = params_[b];
-        Q += M_a.transpose() *
-             Q_kk_.block(pa.offset, pb.offset, pa.size, pb.size) * M_b;
+        Eigen::MatrixXd Q_b = Eigen::MatrixXd::Zero(pb.size, 3);
+        for (const auto& [c, M_c] : point.M) {
+          const ParamBlock& pc = params_[c];
+          Q_b.noalias() -=
+              Q_kk_.block(pb.offset, pc.offset, pb.size, pc.size) * M_c;
+        }
+        point.Q.noalias() -= M_b.transpose() * Q_b;
+        point.Q_kept[b] = std::move(Q_b);
       }
     }
-    return Q;
   }
 
-  // Q_kj for the rows of kept block `pa`: -sum_b Q_ab M_b.
-  Eigen::MatrixXd KeptPointCofactor(const ParamBlock& pa,
-                                    const PointSystem& point) const {
-    Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(pa.size, 3);
-    for (const auto& [b, M_b] : point.M) {
-      const ParamBlock& pb = params_[b];
-      Q -= Q_kk_.block(pa.offset, pb.offset, pa.size, pb.size) * M_b;
-    }
-    return Q;
+  const Eigen::Matrix3d& MinimalPointCofactor(const PointSystem& point) const {
+    return point.Q;
+  }
+
+  // Q_kj for the rows of kept block `id` (zero when the block does not
+  // observe the point).
+  Eigen::MatrixXd KeptPointCofactor(int id, const PointSystem& point) const {
+    auto it = point.Q_kept.find(id);
+    if (it != point.Q_kept.end()) return it->second;
+    return Eigen::MatrixXd::Zero(params_[id].size, 3);
   }
 
   void ComputeResidualCofactors() {
