@@ -288,6 +288,13 @@ TEST(BadInput, OrientationChainWithoutImages) {
           {"import", "--image_path", images, "--database_path", dir + "/db.db"})
           .exit_code,
       0);
+  ExpectRefused({"relative", "--database_path", dir + "/db.db"},
+                "no matched image pairs",
+                {dir + "/db.db"});
+  ExpectRefused(
+      {"match", "--database_path", dir + "/db.db", "--image_path", images},
+      "no image has keypoints",
+      {dir + "/db.db"});
   fs::rename(images + "/b.jpg", dir + "/b.jpg");
   ExpectRefused(
       {"features", "--database_path", dir + "/db.db", "--image_path", images},

@@ -18,5 +18,6 @@ int RunEdit(int argc, char** argv);
 int RunMesh(int argc, char** argv);
 int RunSynthCloud(int argc, char** argv);
 int RunMatch(int argc, char** argv);
+int RunRelative(int argc, char** argv);
 
 }  // namespace bayon

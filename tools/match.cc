@@ -48,6 +48,9 @@ int RunMatch(int argc, char** argv) {
   app.add_option("--detect_rotation",
                  correlation.detect_rotation,
                  "1: find in-plane rotations by quarter turns");
+  app.add_option("--num_passes",
+                 correlation.num_passes,
+                 "Matching passes (later ones centred on earlier matches)");
   app.add_option("--neighborhood_fraction",
                  relaxation.neighborhood_fraction,
                  "Relaxation neighbourhood radius / image size");

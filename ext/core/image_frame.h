@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/LU>  // inverse() and determinant() below
 
 #include <cmath>
 

@@ -46,6 +46,10 @@ void CorrelationMatchingOptions::Check() const {
               "CorrelationMatchingOptions.global_num_trials",
               ">= 1",
               global_num_trials);
+  CheckOption(num_passes >= 1,
+              "CorrelationMatchingOptions.num_passes",
+              ">= 1",
+              num_passes);
   relaxation.Check();
 }
 
@@ -144,6 +148,48 @@ GlobalMapping CentredTurn(const ImagePatches& image1,
   mapping.affine.leftCols<2>() = R;
   mapping.affine.col(2) = c2 - R * c1;
   return mapping;
+}
+
+// For every image-1 point: the mapping's prediction corrected by the median
+// offset (observed minus predicted) of the nearest matched points.
+std::vector<Eigen::Vector2d> PredictFromMatches(
+    const ImagePatches& image1,
+    const ImagePatches& image2,
+    const GlobalMapping& mapping,
+    const std::vector<MatchCandidate>& matches) {
+  constexpr size_t kNeighbors = 8;
+  const auto predict = [&](const Eigen::Vector2d& xy) {
+    return Eigen::Vector2d(mapping.affine.leftCols<2>() * xy +
+                           mapping.affine.col(2));
+  };
+  std::vector<Eigen::Vector2d> offsets;
+  for (const MatchCandidate& m : matches) {
+    offsets.push_back(image2.xy[m.idx2] - predict(image1.xy[m.idx1]));
+  }
+  std::vector<Eigen::Vector2d> centers(image1.size(),
+                                       Eigen::Vector2d::Constant(std::nan("")));
+  std::vector<std::pair<double, int>> near(matches.size());
+  std::vector<double> dx, dy;
+  for (int i = 0; i < image1.size(); ++i) {
+    if (!image1.valid[i]) continue;
+    for (size_t k = 0; k < matches.size(); ++k) {
+      near[k] = {(image1.xy[matches[k].idx1] - image1.xy[i]).squaredNorm(),
+                 static_cast<int>(k)};
+    }
+    const size_t count = std::min(kNeighbors, near.size());
+    std::partial_sort(near.begin(), near.begin() + count, near.end());
+    dx.clear();
+    dy.clear();
+    for (size_t k = 0; k < count; ++k) {
+      dx.push_back(offsets[near[k].second].x());
+      dy.push_back(offsets[near[k].second].y());
+    }
+    std::nth_element(dx.begin(), dx.begin() + count / 2, dx.end());
+    std::nth_element(dy.begin(), dy.begin() + count / 2, dy.end());
+    centers[i] =
+        predict(image1.xy[i]) + Eigen::Vector2d(dx[count / 2], dy[count / 2]);
+  }
+  return centers;
 }
 
 }  // namespace
@@ -285,6 +331,21 @@ std::vector<MatchCandidate> FindCandidates(
     const ImagePatches& image2,
     const GlobalMapping& mapping,
     const CorrelationMatchingOptions& options) {
+  std::vector<Eigen::Vector2d> centers(image1.size());
+  for (int i = 0; i < image1.size(); ++i) {
+    centers[i] =
+        mapping.affine.leftCols<2>() * image1.xy[i] + mapping.affine.col(2);
+  }
+  return FindCandidatesAround(
+      image1, image2, mapping.quarter_turns, centers, options);
+}
+
+std::vector<MatchCandidate> FindCandidatesAround(
+    const ImagePatches& image1,
+    const ImagePatches& image2,
+    int quarter_turns,
+    const std::vector<Eigen::Vector2d>& centers,
+    const CorrelationMatchingOptions& options) {
   const double side = std::sqrt(options.search_window_fraction);
   const double half_w = 0.5 * side * image2.width;
   const double half_h = 0.5 * side * image2.height;
@@ -306,9 +367,9 @@ std::vector<MatchCandidate> FindCandidates(
   std::vector<MatchCandidate> candidates, local;
   for (int i = 0; i < image1.size(); ++i) {
     if (!image1.valid[i]) continue;
-    RotateWindow(image1.Fine(i), window, mapping.quarter_turns, rotated.data());
-    const Eigen::Vector2d center =
-        mapping.affine.leftCols<2>() * image1.xy[i] + mapping.affine.col(2);
+    const Eigen::Vector2d& center = centers[i];
+    if (!center.allFinite()) continue;
+    RotateWindow(image1.Fine(i), window, quarter_turns, rotated.data());
     const int x0 = std::max(0, static_cast<int>((center.x() - half_w) / cell));
     const int x1 =
         std::min(grid_w - 1, static_cast<int>((center.x() + half_w) / cell));
@@ -455,6 +516,28 @@ PairMatches MatchImagePatches(const ImagePatches& image1,
       result.mapping = mapping;
       result.num_candidates = static_cast<int>(candidates.size());
     }
+  }
+  // Further passes: the search windows centred where the conjugate points
+  // found so far say each point should be (the mapping plus the median
+  // offset of the nearest matches), which follows a displacement field no
+  // single affine mapping describes (a 3D object seen from two stations).
+  for (int pass = 1; pass < options.num_passes; ++pass) {
+    if (relaxed.matches.size() < 8) break;
+    const std::vector<Eigen::Vector2d> centers =
+        PredictFromMatches(image1, image2, result.mapping, relaxed.matches);
+    const std::vector<MatchCandidate> candidates = FindCandidatesAround(
+        image1, image2, result.mapping.quarter_turns, centers, options);
+    RelaxationResult attempt =
+        RelaxMatches(image1.xy,
+                     image2.xy,
+                     candidates,
+                     result.mapping.affine.leftCols<2>(),
+                     std::max(image1.width, image1.height),
+                     options.relaxation);
+    if (attempt.matches.size() <= relaxed.matches.size()) break;
+    relaxed = std::move(attempt);
+    result.num_candidates = static_cast<int>(candidates.size());
+    result.num_passes = pass + 1;
   }
   result.num_relaxed = static_cast<int>(relaxed.matches.size());
   result.num_iterations = relaxed.num_iterations;

@@ -21,7 +21,11 @@
 //    image (sqrt(1/16) of its width and height) around its predicted
 //    position; those with r >= 0.75 are candidates.
 // 3. Relaxation (relaxation.h): continuity and uniqueness, loser-takes-
-//    nothing.
+//    nothing. Then a second pass of 2 and 3 with each search window centred
+//    where the conjugate points of the first pass say the point should be
+//    (the mapping plus the median offset of the nearest matches): the
+//    displacements between two views of a 3D object vary more than one
+//    affine mapping and a window of 1/16 of the image can follow.
 // 4. Sub-pixel conjugate points. The image-1 keypoint is the reference; the
 //    correlation peak of its window is searched within +-refine_radius
 //    pixels of the matched image-2 keypoint and located to sub-pixel
@@ -74,6 +78,10 @@ struct CorrelationMatchingOptions {
   int global_num_trials = 500;
   unsigned int seed = 1;
 
+  // Matching passes: each pass after the first centres the search windows
+  // on the positions the previous pass's conjugate points predict.
+  int num_passes = 2;
+
   RelaxationOptions relaxation;
   void Check() const;
 };
@@ -95,7 +103,8 @@ struct PairMatches {
   GlobalMapping mapping;   // the mapping the matches were found with
   int num_candidates = 0;  // candidate pairs with r >= min_ncc
   int num_relaxed = 0;     // one-to-one after relaxation
-  int num_iterations = 0;  // relaxation rounds
+  int num_iterations = 0;  // relaxation rounds (of the last pass)
+  int num_passes = 1;      // passes that improved the result
   // Conjugate points: keypoint indices; the reference point in image 1 (the
   // centre of the keypoint's pixel) and the sub-pixel position of its
   // conjugate in image 2, with their correlation.
@@ -115,6 +124,15 @@ std::vector<MatchCandidate> FindCandidates(
     const ImagePatches& image1,
     const ImagePatches& image2,
     const GlobalMapping& mapping,
+    const CorrelationMatchingOptions& options);
+
+// The same around given positions in image 2 (one per image-1 point; NaN:
+// not searched), with image 2 turned by `quarter_turns`.
+std::vector<MatchCandidate> FindCandidatesAround(
+    const ImagePatches& image1,
+    const ImagePatches& image2,
+    int quarter_turns,
+    const std::vector<Eigen::Vector2d>& centers,
     const CorrelationMatchingOptions& options);
 
 // The sub-pixel conjugate in image 2 of keypoint idx1 of image 1 near

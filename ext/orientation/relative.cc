@@ -1,0 +1,301 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/orientation/relative.h"
+
+#include "ext/colmap/scene_database.h"
+#include "ext/colmap/table_relative.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/core/parallel.h"
+#include "ext/core/progress.h"
+
+#include <glog/logging.h>
+
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+namespace bayon {
+
+void RelativeOptions::Check() const { estimation.Check(); }
+
+ConjugatePoints PairConjugatePoints(const FeatureKeypoints& keypoints1,
+                                    const FeatureKeypoints& keypoints2,
+                                    const FeatureMatches& matches,
+                                    const std::optional<MatchRecord>& record,
+                                    const ImageVectors& vectors1,
+                                    const ImageVectors& vectors2,
+                                    std::vector<int>* rows) {
+  const bool subpixel =
+      record && record->xy1.size() == static_cast<size_t>(matches.rows());
+  ConjugatePoints points;
+  rows->clear();
+  for (int row = 0; row < matches.rows(); ++row) {
+    const uint32_t idx1 = matches(row, 0), idx2 = matches(row, 1);
+    if (idx1 >= keypoints1.rows() || idx2 >= keypoints2.rows()) continue;
+    const Eigen::Vector2d pixel1 = subpixel ? record->xy1[row].cast<double>()
+                                            : KeypointXY(keypoints1, idx1);
+    const Eigen::Vector2d pixel2 = subpixel ? record->xy2[row].cast<double>()
+                                            : KeypointXY(keypoints2, idx2);
+    Eigen::Vector3d u1, u2;
+    if (!vectors1.FromPixel(pixel1, &u1) || !vectors2.FromPixel(pixel2, &u2)) {
+      continue;
+    }
+    points.u1.push_back(u1);
+    points.u2.push_back(u2);
+    points.pixel1.push_back(pixel1);
+    points.pixel2.push_back(pixel2);
+    rows->push_back(row);
+  }
+  return points;
+}
+
+namespace {
+
+struct PairJob {
+  PairOrientationReport report;
+  FeatureMatches matches;
+  std::optional<MatchRecord> match_record;
+  RelativeOrientation result;
+  std::vector<uint8_t> row_inliers;  // per match row
+};
+
+void OrientPair(const std::map<image_t, FeatureKeypoints>& keypoints,
+                const std::map<image_t, ImageVectors>& vectors,
+                const RelativeOptions& options,
+                PairJob* job) {
+  Timer timer;
+  PairOrientationReport& report = job->report;
+  const ImageVectors& v1 = vectors.at(report.image_id1);
+  const ImageVectors& v2 = vectors.at(report.image_id2);
+  report.calibrated = v1.calibrated() && v2.calibrated();
+  std::optional<MatchRecord> record;
+  if (options.use_subpixel_points) record = job->match_record;
+  report.subpixel =
+      record && record->xy1.size() == static_cast<size_t>(job->matches.rows());
+  std::vector<int> rows;
+  const ConjugatePoints points =
+      PairConjugatePoints(keypoints.at(report.image_id1),
+                          keypoints.at(report.image_id2),
+                          job->matches,
+                          record,
+                          v1,
+                          v2,
+                          &rows);
+  RelativeOrientationOptions estimation = options.estimation;
+  estimation.calibrated = report.calibrated;
+  job->result = EstimateRelativeOrientation(points, estimation);
+  const RelativeOrientation& result = job->result;
+  job->row_inliers.assign(job->matches.rows(), 0);
+  if (!result.inliers.empty()) {
+    for (size_t k = 0; k < rows.size(); ++k) {
+      job->row_inliers[rows[k]] = result.inliers[k];
+    }
+  }
+  report.oriented = result.success;
+  report.reason = result.reason;
+  report.num_inliers = result.num_inliers;
+  report.num_blunders = report.num_matches - result.num_inliers;
+  report.sigma0_px = result.sigma0_px;
+  report.convergence_angle_deg = result.convergence_angle_deg;
+  report.median_intersection_angle_deg = result.median_intersection_angle_deg;
+  report.omega_phi_kappa_deg = result.omega_phi_kappa_deg;
+  report.std_omega_phi_kappa_deg = result.std_omega_phi_kappa_deg;
+  report.std_base_deg = result.std_base_deg;
+  report.cam2_from_cam1 = result.Cam2FromCam1();
+  report.seconds = timer.Seconds();
+}
+
+void WritePair(Database* database,
+               const std::map<camera_t, Camera>& colmap_cameras,
+               const std::map<image_t, camera_t>& camera_of_image,
+               const RelativeOptions& options,
+               const PairJob& job) {
+  const PairOrientationReport& report = job.report;
+  const RelativeOrientation& result = job.result;
+  const image_t id1 = report.image_id1, id2 = report.image_id2;
+  // What an earlier run found for this pair no longer stands.
+  database->DeleteTwoViewGeometry(id1, id2);
+  RelativeOrientationRecord record;
+  record.success = result.success;
+  record.reason = result.reason;
+  record.calibrated = report.calibrated;
+  record.assume_zero_distortion = options.assume_zero_distortion;
+  record.num_matches = report.num_matches;
+  record.num_inliers = result.num_inliers;
+  record.num_blunders = report.num_blunders;
+  record.omega_phi_kappa_deg = result.omega_phi_kappa_deg;
+  record.std_omega_phi_kappa_deg = result.std_omega_phi_kappa_deg;
+  record.base = result.base;
+  record.std_base_deg = result.std_base_deg;
+  record.sigma0_px = result.sigma0_px;
+  record.robust_sigma_px = result.lmeds_sigma_px;
+  record.convergence_angle_deg = result.convergence_angle_deg;
+  record.median_intersection_angle_deg = result.median_intersection_angle_deg;
+  record.num_iterations = result.num_iterations;
+  record.L = result.L;
+  record.covariance = result.covariance;
+  record.cam2_from_cam1 = report.cam2_from_cam1;
+  record.inliers = job.row_inliers;
+  record.seconds = report.seconds;
+  WriteRelativeOrientation(database, id1, id2, record);
+  if (!result.success) return;
+
+  TwoViewGeometry geometry =
+      TwoViewGeometryFromPoses(colmap_cameras.at(camera_of_image.at(id1)),
+                               Rigid3d(),
+                               colmap_cameras.at(camera_of_image.at(id2)),
+                               report.cam2_from_cam1);
+  geometry.config = report.calibrated ? TwoViewConfig::kCalibrated
+                                      : TwoViewConfig::kUncalibrated;
+  geometry.inlier_matches.resize(result.num_inliers, 2);
+  int k = 0;
+  for (int row = 0; row < job.matches.rows(); ++row) {
+    if (!job.row_inliers[row]) continue;
+    geometry.inlier_matches.row(k++) = job.matches.row(row);
+  }
+  geometry.inlier_matches.conservativeResize(k, 2);
+  database->WriteTwoViewGeometry(id1, id2, geometry);
+}
+
+void LogPair(const PairOrientationReport& report) {
+  std::ostringstream line;
+  line << std::fixed << std::setprecision(3) << report.name1 << " - "
+       << report.name2 << ": ";
+  if (report.skipped) {
+    line << "skipped, " << report.reason;
+    LOG(INFO) << line.str();
+    return;
+  }
+  line << report.num_matches << " matches"
+       << (report.subpixel ? " (sub-pixel)" : "") << ", " << report.num_inliers
+       << " inliers, " << report.num_blunders << " blunders";
+  if (report.oriented) {
+    line << ", sigma0 " << report.sigma0_px << " px, omega/phi/kappa "
+         << report.omega_phi_kappa_deg.transpose() << " deg (+- "
+         << report.std_omega_phi_kappa_deg.transpose() << "), base +- "
+         << report.std_base_deg.norm() << " deg, convergence "
+         << report.convergence_angle_deg << " deg, "
+         << (report.calibrated ? "calibrated" : "uncalibrated") << ", "
+         << report.seconds << " s";
+    LOG(INFO) << line.str();
+  } else {
+    line << " -- not oriented: " << report.reason;
+    LOG(WARNING) << line.str();
+  }
+}
+
+}  // namespace
+
+RelativeSummary OrientImagePairs(const std::string& database_path,
+                                 const RelativeOptions& options) {
+  options.Check();
+  CheckFileExists(database_path, "--database_path");
+  Timer timer;
+  Database database(database_path, Database::Mode::kReadWrite);
+  CheckBayonSchema(&database);
+  database.CheckWritable("two_view_geometries");
+  const std::vector<DatabaseImage> images = database.ReadAllImages();
+  if (images.empty()) {
+    ThrowInputError(database_path,
+                    ": the database has no images (run `bayon import`, "
+                    "`bayon features` and `bayon match` first)");
+  }
+  std::vector<std::pair<pair_t, FeatureMatches>> matched;
+  for (auto& [pair_id, matches] : database.ReadAllMatches()) {
+    if (matches.rows() > 0) matched.emplace_back(pair_id, std::move(matches));
+  }
+  if (matched.empty()) {
+    ThrowInputError(database_path,
+                    ": no matched image pairs (run `bayon match` first)");
+  }
+  std::map<image_t, std::string> names;
+  std::map<image_t, camera_t> camera_of_image;
+  std::map<image_t, ImageVectors> vectors;
+  std::map<image_t, FeatureKeypoints> keypoints;
+  std::map<camera_t, Camera> colmap_cameras;
+  for (const Camera& camera : database.ReadAllCameras()) {
+    colmap_cameras.emplace(camera.camera_id, camera);
+  }
+  for (const DatabaseImage& image : images) {
+    names[image.image_id] = image.name;
+    camera_of_image[image.image_id] = image.camera_id;
+    if (!colmap_cameras.count(image.camera_id)) {
+      ThrowInputError(database_path,
+                      ": image ",
+                      image.name,
+                      " refers to camera ",
+                      image.camera_id,
+                      ", which is not in the cameras table");
+    }
+    vectors.emplace(image.image_id,
+                    ImageVectors::FromDatabase(
+                        &database, image, options.assume_zero_distortion));
+  }
+
+  std::vector<PairJob> jobs;
+  for (auto& [pair_id, matches] : matched) {
+    const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+    PairJob job;
+    PairOrientationReport& report = job.report;
+    report.image_id1 = id1;
+    report.image_id2 = id2;
+    report.name1 = names.count(id1) ? names[id1] : std::to_string(id1);
+    report.name2 = names.count(id2) ? names[id2] : std::to_string(id2);
+    report.num_matches = static_cast<int>(matches.rows());
+    if (!names.count(id1) || !names.count(id2)) {
+      report.reason = "matches of an image that is not in the images table";
+    } else if (!options.overwrite &&
+               (database.ExistsTwoViewGeometry(id1, id2) ||
+                ReadRelativeOrientation(&database, id1, id2))) {
+      report.skipped = true;
+      report.reason = "oriented already (--overwrite 1 orients it again)";
+    } else {
+      for (image_t id : {id1, id2}) {
+        if (!keypoints.count(id)) keypoints[id] = database.ReadKeypoints(id);
+      }
+      job.matches = std::move(matches);
+      job.match_record = ReadMatchRecord(&database, id1, id2);
+    }
+    jobs.push_back(std::move(job));
+  }
+
+  std::vector<int> todo;
+  for (int i = 0; i < static_cast<int>(jobs.size()); ++i) {
+    if (!jobs[i].report.skipped && jobs[i].report.reason.empty()) {
+      todo.push_back(i);
+    }
+  }
+  Progress progress("Relative orientation", todo.size(), "pairs");
+  const int batch = 8 * EffectiveNumThreads(options.num_threads);
+  for (size_t start = 0; start < todo.size(); start += batch) {
+    const size_t end = std::min(todo.size(), start + batch);
+    ParallelFor(end - start, options.num_threads, [&](int k) {
+      OrientPair(keypoints, vectors, options, &jobs[todo[start + k]]);
+      progress.Add();
+    });
+    auto transaction = database.BeginTransaction();
+    for (size_t k = start; k < end; ++k) {
+      WritePair(
+          &database, colmap_cameras, camera_of_image, options, jobs[todo[k]]);
+    }
+    transaction.Commit();
+  }
+  progress.Finish();
+
+  RelativeSummary summary;
+  for (const PairJob& job : jobs) {
+    LogPair(job.report);
+    if (job.report.skipped) {
+      ++summary.num_skipped;
+    } else if (job.report.oriented) {
+      ++summary.num_oriented;
+    } else {
+      ++summary.num_failed;
+    }
+    summary.pairs.push_back(job.report);
+  }
+  summary.seconds = timer.Seconds();
+  return summary;
+}
+
+}  // namespace bayon
