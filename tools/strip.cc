@@ -15,7 +15,7 @@ namespace bayon {
 
 int RunStripCommand(int argc, char** argv) {
   std::string database_path, output_path, control_path, log_path;
-  std::string ring = "auto", datum = "auto";
+  std::string ring = "auto", datum = "auto", order = "auto";
   bool overwrite = false;
   StripOptions options;
   CommandLine command(
@@ -78,6 +78,9 @@ int RunStripCommand(int argc, char** argv) {
   options.ring = ring == "closed" ? RingClosure::kClosed
                  : ring == "open" ? RingClosure::kOpen
                                   : RingClosure::kAuto;
+  options.order = order == "name"    ? StripOrder::kName
+                  : order == "graph" ? StripOrder::kGraph
+                                     : StripOrder::kAuto;
   options.datum.datum = datum == "control"   ? DatumType::kControl
                         : datum == "minimum" ? DatumType::kMinimum
                                              : DatumType::kAuto;

@@ -330,6 +330,11 @@ class Adjuster {
     const double variance =
         precision.camera_covariance[camera_idx](param_idx, param_idx);
     estimate.std_dev = std::sqrt(std::max(variance, 0.0));
+    if (camera_idx <
+        static_cast<int>(precision.camera_exterior_correlation.size())) {
+      estimate.exterior_correlation =
+          precision.camera_exterior_correlation[camera_idx](param_idx);
+    }
     estimate.t_value = estimate.std_dev > 0
                            ? std::abs(estimate.value) / estimate.std_dev
                            : std::numeric_limits<double>::infinity();
@@ -384,6 +389,15 @@ class Adjuster {
         }
       }
       result_.parameter_correlations[c] = selected;
+      // Determinability: a parameter that moves with an exterior orientation
+      // is not separated from it by this network.
+      for (int idx : free_idxs) {
+        const double r = precision.camera_exterior_correlation[c](idx);
+        if (r > options_.max_correlation) {
+          result_.correlation_flags.push_back(
+              {static_cast<int>(c), names[idx], "exterior orientation", r});
+        }
+      }
     }
     RecordSigma0(precision.sigma0);
   }

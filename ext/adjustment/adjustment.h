@@ -81,6 +81,8 @@ struct ParameterEstimate {
   double value = 0;
   double std_dev = 0;
   double t_value = 0;
+  // Largest correlation with an exterior orientation parameter.
+  double exterior_correlation = 0;
 };
 
 struct RemovedParameter {

@@ -309,7 +309,8 @@ class ReportBuilder {
            {"unit", ParameterUnit(camera.model_id, e.name)},
            {"value", e.value},
            {"std_dev", e.std_dev},
-           {"t", std::isfinite(e.t_value) ? Json(e.t_value) : Json(nullptr)}});
+           {"t", std::isfinite(e.t_value) ? Json(e.t_value) : Json(nullptr)},
+           {"max_correlation_exterior", e.exterior_correlation}});
     }
     json["parameters"] = parameters;
     Json correlations = Json::array();
@@ -635,16 +636,19 @@ std::string Printout(const Json& r) {
                 sc["mode"].get<std::string>().c_str(),
                 sc["significance_t"].get<double>());
   out += Rule();
-  out += "   camera  parameter          value        std dev        t   unit\n";
+  out +=
+      "   camera  parameter          value        std dev        t   unit"
+      "     max corr. with ext. or.\n";
   for (const Json& p : sc["parameters"]) {
     out += Printf(
-        "   %6u  %-9s %14.6e %14.6e %8s   %s\n",
+        "   %6u  %-9s %14.6e %14.6e %8s   %-6s %6.2f\n",
         p["camera_id"].get<unsigned>(),
         p["name"].get<std::string>().c_str(),
         p["value"].get<double>(),
         p["std_dev"].get<double>(),
         p["t"].is_null() ? "-" : Printf("%.1f", p["t"].get<double>()).c_str(),
-        p["unit"].get<std::string>().c_str());
+        p["unit"].get<std::string>().c_str(),
+        p["max_correlation_exterior"].get<double>());
   }
   for (const Json& p : sc["removed"]) {
     out += Printf("   removed %-9s %14.6e %14.6e %8.2f   %s\n",

@@ -475,16 +475,54 @@ class PrecisionComputer {
     return Q;
   }
 
-  Eigen::MatrixXd KeptCofactor(const ParamBlock& param) const {
-    Eigen::MatrixXd Q =
-        Q_kk_.block(param.offset, param.offset, param.size, param.size);
+  // Q_ab of two kept blocks, S-transformed for the inner-constraint datum.
+  Eigen::MatrixXd KeptCofactor(const ParamBlock& pa,
+                               const ParamBlock& pb) const {
+    Eigen::MatrixXd Q = Q_kk_.block(pa.offset, pb.offset, pa.size, pb.size);
     if (options_.inner_constraints) {
-      const Eigen::MatrixXd g = G_kept_.middleRows(param.offset, param.size);
-      const Eigen::MatrixXd gHQ =
-          g * HQ_kept_.middleCols(param.offset, param.size);
-      Q += -gHQ - gHQ.transpose() + g * HQH_ * g.transpose();
+      const Eigen::MatrixXd g_a = G_kept_.middleRows(pa.offset, pa.size);
+      const Eigen::MatrixXd g_b = G_kept_.middleRows(pb.offset, pb.size);
+      Q += -g_a * HQ_kept_.middleCols(pb.offset, pb.size) -
+           (g_b * HQ_kept_.middleCols(pa.offset, pa.size)).transpose() +
+           g_a * HQH_ * g_b.transpose();
     }
     return Q;
+  }
+
+  // Per camera parameter, the largest correlation with a parameter of an
+  // exterior orientation of an image of that camera.
+  void ComputeExteriorCorrelations() {
+    result_.camera_exterior_correlation.resize(block_->cameras.size());
+    for (size_t c = 0; c < block_->cameras.size(); ++c) {
+      result_.camera_exterior_correlation[c].setZero(
+          block_->cameras[c].free.size());
+    }
+    for (const ParamBlock& intrinsics : params_) {
+      if (intrinsics.kind != BlockKind::kIntrinsics) continue;
+      const Eigen::VectorXd var_i =
+          KeptCofactor(intrinsics, intrinsics).diagonal();
+      Eigen::VectorXd& best =
+          result_.camera_exterior_correlation[intrinsics.owner];
+      for (const ParamBlock& exterior : params_) {
+        if (exterior.kind != BlockKind::kRotation &&
+            exterior.kind != BlockKind::kCenter) {
+          continue;
+        }
+        if (block_->images[exterior.owner].camera_idx != intrinsics.owner) {
+          continue;
+        }
+        const Eigen::VectorXd var_e =
+            KeptCofactor(exterior, exterior).diagonal();
+        const Eigen::MatrixXd Q = KeptCofactor(intrinsics, exterior);
+        for (int i = 0; i < intrinsics.size; ++i) {
+          for (int e = 0; e < exterior.size; ++e) {
+            const double d = var_i(i) * var_e(e);
+            if (d <= 0) continue;
+            best(i) = std::max(best(i), std::abs(Q(i, e)) / std::sqrt(d));
+          }
+        }
+      }
+    }
   }
 
   void ExtractCovariances() {
@@ -504,7 +542,7 @@ class PrecisionComputer {
     }
     for (const ParamBlock& param : params_) {
       if (param.eliminated) continue;
-      const Eigen::MatrixXd C = s2 * KeptCofactor(param);
+      const Eigen::MatrixXd C = s2 * KeptCofactor(param, param);
       switch (param.kind) {
         case BlockKind::kRotation:
           result_.image_covariance[param.owner].topLeftCorner<3, 3>() = C;
@@ -532,20 +570,13 @@ class PrecisionComputer {
       }
     }
     for (const auto& [image, ids] : image_blocks) {
-      const ParamBlock& rotation = params_[ids.first];
-      const ParamBlock& center = params_[ids.second];
-      Eigen::Matrix3d Q = Q_kk_.block(rotation.offset, center.offset, 3, 3);
-      if (options_.inner_constraints) {
-        const Eigen::MatrixXd g_r = G_kept_.middleRows(rotation.offset, 3);
-        const Eigen::MatrixXd g_c = G_kept_.middleRows(center.offset, 3);
-        Q += -g_r * HQ_kept_.middleCols(center.offset, 3) -
-             (g_c * HQ_kept_.middleCols(rotation.offset, 3)).transpose() +
-             g_r * HQH_ * g_c.transpose();
-      }
+      const Eigen::Matrix3d Q =
+          KeptCofactor(params_[ids.first], params_[ids.second]);
       result_.image_covariance[image].topRightCorner<3, 3>() = s2 * Q;
       result_.image_covariance[image].bottomLeftCorner<3, 3>() =
           s2 * Q.transpose();
     }
+    ComputeExteriorCorrelations();
   }
 
   // Q_xx of the parameters of one term (datum-independent use only).

@@ -68,6 +68,9 @@ struct AdjustmentPrecision {
   std::vector<Eigen::Matrix3d> point_covariance;
   std::vector<Eigen::Matrix<double, 6, 6>> image_covariance;
   std::vector<Eigen::MatrixXd> camera_covariance;
+  // Per camera and parameter: the largest correlation with a rotation or
+  // centre coordinate of one of its images (0 for fixed parameters).
+  std::vector<Eigen::VectorXd> camera_exterior_correlation;
   // Per block observation (valid only for active ones).
   std::vector<ObservationStatistics> observations;
   // Weighted control points: residuals (adjusted - given, metres) and their

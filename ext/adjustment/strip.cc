@@ -387,28 +387,59 @@ class StripBuilder {
     return scale;
   }
 
-  // Tries to attach image b to the strip through the model (a, b).
-  bool Connect(int a, int b, bool first_model) {
-    StripModel model;
-    model.image1 = images_[a].row.name;
-    model.image2 = images_[b].row.name;
+  // The model of (a, b): its relative orientation and intersected tie
+  // points, computed once per pair.
+  struct PairModel {
+    bool ok = false;
+    std::string reason;
+    int num_matches = 0;
+    Rigid3d b_from_a;
+    ModelPoints points;
+  };
+
+  const PairModel& Model(int a, int b) {
+    auto it = models_.find({a, b});
+    if (it != models_.end()) return it->second;
+    PairModel& model = models_[{a, b}];
     bool swapped = false;
     const TwoViewGeometry* geometry = Geometry(a, b, &swapped);
     if (geometry == nullptr) {
       model.reason = "no verified matches";
-      result_.models.push_back(model);
-      return false;
+      return model;
     }
     model.num_matches = static_cast<int>(geometry->inlier_matches.rows());
-    const TwoViewGeometry oriented =
-        swapped ? InvertTwoViewGeometry(*geometry) : *geometry;
-    const std::optional<Rigid3d> b_from_a =
-        RelativeOrientation(a, b, oriented, &model.reason);
-    if (!b_from_a) {
+    const std::optional<Rigid3d> b_from_a = RelativeOrientation(
+        a,
+        b,
+        swapped ? InvertTwoViewGeometry(*geometry) : *geometry,
+        &model.reason);
+    if (!b_from_a) return model;
+    model.b_from_a = *b_from_a;
+    model.points = IntersectModel(a, b, *b_from_a);
+    model.ok = true;
+    return model;
+  }
+
+  int NumCommonPoints(const PairModel& model) const {
+    int count = 0;
+    for (int track : model.points.tracks)
+      count += track_points_[track].has_value();
+    return count;
+  }
+
+  // Tries to attach image b to the strip through the model (a, b).
+  bool Connect(int a, int b, bool first_model) {
+    const PairModel& pair = Model(a, b);
+    StripModel model;
+    model.image1 = images_[a].row.name;
+    model.image2 = images_[b].row.name;
+    model.num_matches = pair.num_matches;
+    model.reason = pair.reason;
+    if (!pair.ok) {
       result_.models.push_back(model);
       return false;
     }
-    const ModelPoints points = IntersectModel(a, b, *b_from_a);
+    const ModelPoints& points = pair.points;
     model.num_points = static_cast<int>(points.tracks.size());
     double scale = 1.0;
     if (!first_model) {
@@ -423,7 +454,8 @@ class StripBuilder {
     model.scale = scale;
     model.connected = true;
     const Rigid3d& a_from_world = images_[a].cam_from_world;
-    const Rigid3d scaled(b_from_a->rotation, scale * b_from_a->translation);
+    const Rigid3d scaled(pair.b_from_a.rotation,
+                         scale * pair.b_from_a.translation);
     images_[b].cam_from_world = scaled * a_from_world;
     images_[b].placed = true;
     const Rigid3d world_from_a = a_from_world.Inverse();
@@ -435,10 +467,69 @@ class StripBuilder {
     }
     sequence_.push_back(b);
     result_.models.push_back(model);
+    IntersectTracksOf(b);
+    return true;
+  }
+
+  // The intersection, from all oriented images, of b's tracks that have
+  // none yet: tie points b shares with images other than its model partner
+  // carry the scale on to the next models.
+  void IntersectTracksOf(int b) {
+    for (const auto& [keypoint, track] : track_at_[b]) {
+      if (track_points_[track]) continue;
+      track_points_[track] = IntersectTrack(track);
+    }
+  }
+
+  std::optional<Eigen::Vector3d> IntersectTrack(int track) {
+    std::vector<bayon::Ray> rays;
+    for (const auto& [image_idx, keypoint] : tracks_[track]) {
+      const StripImage& image = images_[image_idx];
+      if (!image.placed) continue;
+      const Eigen::Vector3d* ray = Ray(image_idx, keypoint);
+      if (ray == nullptr) continue;
+      rays.push_back(
+          {image.cam_from_world.Center(),
+           (image.cam_from_world.rotation.inverse() * *ray).normalized()});
+    }
+    return IntersectRays(rays, options_.min_intersection_angle_deg);
+  }
+
+  // The images in the order of their names form the strip when every
+  // neighbour in that order is related to the next (or to one within the
+  // gap that bridges a missing model).
+  bool NameOrderIsAStrip() const {
+    for (size_t b = 1; b < images_.size(); ++b) {
+      bool related = false;
+      for (int gap = 1; gap <= options_.max_gap && !related; ++gap) {
+        const int a = static_cast<int>(b) - gap;
+        bool swapped = false;
+        related = a >= 0 && Geometry(a, static_cast<int>(b), &swapped);
+      }
+      if (!related) return false;
+    }
     return true;
   }
 
   void ChainModels() {
+    const bool by_name =
+        options_.order == StripOrder::kName ||
+        (options_.order == StripOrder::kAuto && NameOrderIsAStrip());
+    result_.order = by_name ? "name" : "graph";
+    if (by_name) {
+      ChainInNameOrder();
+    } else {
+      ChainByGraph();
+    }
+    for (size_t i = 0; i < images_.size(); ++i) {
+      if (!images_[i].placed) {
+        result_.unoriented_images.push_back(images_[i].row.name);
+      }
+    }
+  }
+
+  void ChainInNameOrder() {
+    sequential_ = true;
     images_[0].placed = true;
     images_[0].cam_from_world = Rigid3d();
     sequence_.push_back(0);
@@ -458,7 +549,6 @@ class StripBuilder {
         connected = Connect(a, static_cast<int>(b), false);
       }
       if (!connected) {
-        result_.unoriented_images.push_back(images_[b].row.name);
         LOG(WARNING) << "strip: " << images_[b].row.name
                      << " could not be connected: "
                      << result_.models.back().reason;
@@ -466,9 +556,57 @@ class StripBuilder {
     }
   }
 
+  // Images whose names do not follow the strip (temple-ring's stations were
+  // photographed out of order, some turned upside down): the strip grows
+  // from the model with the most intersected tie points, each step adding
+  // the image whose model shares the most tie points with the strip.
+  void ChainByGraph() {
+    std::pair<int, int> first{-1, -1};
+    size_t best_points = 0;
+    for (const auto& [pair, geometry] : geometries_) {
+      const PairModel& model = Model(pair.first, pair.second);
+      if (model.ok && model.points.tracks.size() > best_points) {
+        best_points = model.points.tracks.size();
+        first = pair;
+      }
+    }
+    if (first.first < 0 ||
+        static_cast<int>(best_points) < options_.min_common_points) {
+      throw RunFailure(
+          "no image pair forms a model (no relative "
+          "orientation with intersecting tie points)");
+    }
+    images_[first.first].placed = true;
+    images_[first.first].cam_from_world = Rigid3d();
+    sequence_.push_back(first.first);
+    Connect(first.first, first.second, true);
+    while (true) {
+      int best_a = -1, best_b = -1, best_common = 0;
+      for (const auto& [pair, geometry] : geometries_) {
+        for (const auto& [a, b] :
+             {pair, std::make_pair(pair.second, pair.first)}) {
+          if (!images_[a].placed || images_[b].placed) continue;
+          const PairModel& model = Model(a, b);
+          if (!model.ok) continue;
+          const int common = NumCommonPoints(model);
+          if (common > best_common) {
+            best_common = common;
+            best_a = a;
+            best_b = b;
+          }
+        }
+      }
+      if (best_a < 0 || best_common < options_.min_common_points) break;
+      Connect(best_a, best_b, false);
+    }
+  }
+
   // ---------------------------------------------------------------- ring
   void CloseRing() {
-    if (options_.ring == RingClosure::kOpen || sequence_.size() < 3) return;
+    if (!sequential_ || options_.ring == RingClosure::kOpen ||
+        sequence_.size() < 3) {
+      return;
+    }
     const int last = sequence_.back();
     const int first = sequence_.front();
     bool swapped = false;
@@ -562,18 +700,7 @@ class StripBuilder {
   // Every track from all the rays of its oriented images.
   void TriangulateTracks() {
     for (size_t t = 0; t < tracks_.size(); ++t) {
-      std::vector<bayon::Ray> rays;
-      for (const auto& [image_idx, keypoint] : tracks_[t]) {
-        const StripImage& image = images_[image_idx];
-        if (!image.placed) continue;
-        const Eigen::Vector3d* ray = Ray(image_idx, keypoint);
-        if (ray == nullptr) continue;
-        rays.push_back(
-            {image.cam_from_world.Center(),
-             (image.cam_from_world.rotation.inverse() * *ray).normalized()});
-      }
-      track_points_[t] =
-          IntersectRays(rays, options_.min_intersection_angle_deg);
+      track_points_[t] = IntersectTrack(static_cast<int>(t));
     }
   }
 
@@ -760,6 +887,8 @@ class StripBuilder {
   std::vector<std::optional<Eigen::Vector3d>> track_points_;
   std::vector<std::unordered_map<int, int>> track_at_;  // keypoint -> track
   std::vector<int> sequence_;  // placed images in the order of placing
+  bool sequential_ = false;    // chained in name order (a strip or ring)
+  std::map<std::pair<int, int>, PairModel> models_;
   AdjustmentBlock block_;
 };
 
@@ -799,6 +928,7 @@ std::string StripReportJson(const StripResult& result) {
   root["num_images"] = result.model.images.size();
   root["num_points"] = result.model.points3D.size();
   root["num_tracks"] = result.num_tracks;
+  root["order"] = result.order;
   root["unoriented_images"] = result.unoriented_images;
   Json models = Json::array();
   for (const StripModel& m : result.models) {

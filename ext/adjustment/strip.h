@@ -10,7 +10,8 @@
 //     camera, base length 1); each next model is attached to the previous
 //     one at their common image, its scale transferred through the tie
 //     points the two models share (median ratio of their distances from the
-//     common projection centre);
+//     common projection centre). Models follow the images' names, or, when
+//     the names are not the sequence, the view graph (StripOrder);
 //  2. a closed ring (the last image related to the first, as around the
 //     Bayon tower) gives the closure error, which is distributed along the
 //     strip: rotations in proportion to the image's place in the sequence,
@@ -37,11 +38,17 @@
 namespace bayon {
 
 enum class RingClosure { kAuto, kClosed, kOpen };
+// The order in which models are connected: the images' names (a strip or
+// ring photographed in sequence), or the view graph (each step the image
+// sharing the most tie points with the strip); kAuto takes the names when
+// every image is related to its predecessor.
+enum class StripOrder { kAuto, kName, kGraph };
 
 struct StripOptions {
   // kAuto: closed when the last image has a relative orientation with the
   // first.
   RingClosure ring = RingClosure::kAuto;
+  StripOrder order = StripOrder::kAuto;
   // A model whose relative orientation is missing is bridged by a model
   // with an earlier image up to this many places back in the sequence.
   int max_gap = 2;
@@ -79,6 +86,7 @@ struct StripResult {
   Scene model;  // COLMAP cameras, all keypoints as 2D points
   std::vector<StripModel> models;
   std::vector<std::string> unoriented_images;
+  std::string order;  // "name" or "graph"
   int num_tracks = 0;
   bool closed_ring = false;
   // The ring's closure error before distribution: rotation, and position as

@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <map>
 #include <random>
 
 #include "tests/testing.h"
@@ -130,6 +132,48 @@ TEST(Strip, OpenStripFromEssentialMatricesInModelCoordinates) {
   EXPECT_FALSE(result.closed_ring);
   EXPECT_FALSE(result.has_control);
   // Model coordinates: right up to a similarity.
+  const SparseEvaluation evaluation =
+      EvaluateSparse(result.model, ws.truth.scene);
+  EXPECT_LT(evaluation.center_rms_relative, 0.005);
+  EXPECT_LT(evaluation.rotation_rms_deg, 0.1);
+}
+
+// Names that do not follow the ring (temple-ring's were photographed out
+// of order): the models are connected along the view graph.
+TEST(Strip, ImagesOutOfOrderFollowTheViewGraph) {
+  Workspace ws = MakeWorkspace("strip_graph");
+  std::vector<image_t> ids;
+  for (const auto& [id, image] : ws.truth.scene.images) ids.push_back(id);
+  std::mt19937 rng(9);
+  std::vector<image_t> shuffled = ids;
+  std::shuffle(shuffled.begin(), shuffled.end(), rng);
+  std::map<std::string, std::string> renamed;
+  for (size_t i = 0; i < ids.size(); ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "shot_%02zu.png", i);
+    renamed[ws.truth.scene.images.at(shuffled[i]).name] = name;
+  }
+  {
+    Database database(ws.path + "/database.db", Database::Mode::kReadWrite);
+    auto transaction = database.BeginTransaction();
+    for (DatabaseImage row : database.ReadAllImages()) {
+      row.name = renamed.at(row.name) + ".tmp";
+      database.UpdateImage(row);
+    }
+    for (DatabaseImage row : database.ReadAllImages()) {
+      row.name = row.name.substr(0, row.name.size() - 4);
+      database.UpdateImage(row);
+    }
+    transaction.Commit();
+  }
+  for (auto& [id, image] : ws.truth.scene.images) {
+    image.name = renamed.at(image.name);
+  }
+  StripOptions options;
+  options.num_threads = 1;
+  const StripResult result = RunStrip(ws.path + "/database.db", "", options);
+  EXPECT_EQ(result.order, "graph");
+  EXPECT_EQ(result.model.images.size(), 16u);
   const SparseEvaluation evaluation =
       EvaluateSparse(result.model, ws.truth.scene);
   EXPECT_LT(evaluation.center_rms_relative, 0.005);
