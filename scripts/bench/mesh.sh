@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Benchmark of the editing and meshing stages on a synthetic tower cloud of
+# one million points (2 % blunders, per-point sigmas, true normals): `bayon
+# edit` (local surface fitting and PCL's statistical outlier removal), then
+# every `bayon mesh` method on the edited cloud, and normal estimation (PCL +
+# MST orientation) on the same cloud without normals. Prints wall time and
+# peak memory (/usr/bin/time -v) per step.
+#   scripts/bench.sh mesh [num_points]     (default 1000000)
+set -euo pipefail
+num_points="${1:-1000000}"
+dir="$BAYON_BUILD/bench/mesh"
+rm -rf "$dir"
+mkdir -p "$dir/dense" "$dir/mesh"
+
+"$BAYON" synth_cloud --shape box_tower --num_points "$num_points" \
+  --with_normals 1 --output_path "$dir/dense/points.ply" \
+  --truth_path "$dir/surface.ply" >/dev/null
+"$BAYON" synth_cloud --shape box_tower --num_points "$num_points" \
+  --blunder_fraction 0 --output_path "$dir/dense/plain.ply" >/dev/null
+
+printf '%-36s %10s %10s %10s %12s\n' step points faces "time s" "peak MB"
+# run LABEL REPORT_JSON COMMAND...: times the command, prints a row.
+run() {
+  local label="$1" report="$2"
+  shift 2
+  if ! /usr/bin/time -v -o "$dir/time.txt" "$@" >"$dir/$label.log" 2>&1; then
+    printf '%-36s failed, see %s\n' "$label" "$dir/$label.log"
+    return
+  fi
+  local wall rss faces points
+  wall=$(sed -n 's/.*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "$dir/time.txt" |
+    awk -F: '{ s = 0; for (i = 1; i <= NF; ++i) s = s * 60 + $i; print s }')
+  rss=$(sed -n 's/.*Maximum resident set size (kbytes): //p' "$dir/time.txt")
+  faces=$(grep -o '"num_faces": [0-9]*' "$report" 2>/dev/null | grep -o '[0-9]*$' || echo -)
+  points=$(grep -o '"num_input[a-z_]*": [0-9]*' "$report" 2>/dev/null | grep -o '[0-9]*$' || echo -)
+  printf '%-36s %10s %10s %10.1f %12.0f\n' "$label" "$points" "$faces" "$wall" "$((rss / 1024))"
+}
+
+run "edit surface_fit" "$dir/edit.json" \
+  "$BAYON" edit --input_path "$dir/dense/points.ply" \
+  --output_path "$dir/dense/points_edited.ply" --report_path "$dir/edit.json"
+run "edit statistical (PCL)" "$dir/edit_statistical.json" \
+  "$BAYON" edit --input_path "$dir/dense/points.ply" --method statistical \
+  --output_path "$dir/dense/points_statistical.ply" \
+  --report_path "$dir/edit_statistical.json"
+for method in cylinder greedy_projection poisson advancing_front colmap_poisson; do
+  run "mesh $method" "$dir/mesh/$method.json" \
+    "$BAYON" mesh --input_path "$dir/dense/points_edited.ply" --method "$method" \
+    --output_path "$dir/mesh/$method.ply" --report_path "$dir/mesh/$method.json"
+done
+run "mesh greedy_projection + normals" "$dir/mesh/estimated.json" \
+  "$BAYON" mesh --input_path "$dir/dense/plain.ply" --method greedy_projection \
+  --output_path "$dir/mesh/estimated.ply" --report_path "$dir/mesh/estimated.json"
+echo "outputs and logs in $dir"
