@@ -42,38 +42,56 @@ double Median(std::vector<double> values) {
 
 // One pass of the local surface test over every point, with patches fitted
 // to the points not flagged by the previous pass.
+// For every point its `width` nearest other points (n x width, -1 where the
+// cloud has fewer), found once: the passes then take the nearest unflagged
+// ones from these lists instead of searching again.
+std::vector<int> NearestNeighbors(const PointCloud& cloud,
+                                  int width,
+                                  int num_threads) {
+  const size_t n = cloud.size();
+  const CenteredPclCloud pcl_cloud(cloud.positions);
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(pcl_cloud.cloud);
+  std::vector<int> lists(n * width, -1);
+  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
+    std::vector<int> found(width + 1);
+    std::vector<float> squared_distances(width + 1);
+    const int num_found = tree.nearestKSearch(
+        (*pcl_cloud.cloud)[i], width + 1, found, squared_distances);
+    int count = 0;
+    for (int j = 0; j < num_found && count < width; ++j) {
+      if (found[j] != static_cast<int>(i))
+        lists[i * width + count++] = found[j];
+    }
+  });
+  return lists;
+}
+
 void SurfaceFitPass(const PointCloud& cloud,
                     const std::vector<Eigen::Vector3d>& sigmas,
+                    const std::vector<int>& nearest,
+                    int width,
                     const SurfaceFitEditOptions& options,
                     double min_variance,
                     int num_threads,
                     std::vector<EditReason>* reasons,
                     EditIterationReport* report) {
   const size_t n = cloud.size();
-  std::vector<int> inliers;
-  inliers.reserve(n);
-  for (size_t i = 0; i < n; ++i) {
-    if ((*reasons)[i] == EditReason::kKept) inliers.push_back(i);
-  }
-  const CenteredPclCloud pcl_cloud(cloud.positions, inliers);
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  tree.setInputCloud(pcl_cloud.cloud);
-
   const int k = options.num_neighbors;
   const bool weighted = !sigmas.empty();
   // First the k nearest unflagged neighbours of every point (itself left
-  // out) and the normal of every unflagged point from its neighbourhood.
+  // out; fewer where more than width - k of its nearest are flagged) and the
+  // normal of every unflagged point from its neighbourhood.
   std::vector<int> neighbor_index(n * k, -1);
   std::vector<Eigen::Vector3d> normals(n, Eigen::Vector3d::Zero());
   ForEachPointInBlocks(n, num_threads, [&](size_t i) {
-    std::vector<int> found(k + 1);
-    std::vector<float> squared_distances(k + 1);
-    const int num_found = tree.nearestKSearch(
-        pcl_cloud.ToPcl(cloud.positions[i]), k + 1, found, squared_distances);
     int count = 0;
-    for (int j = 0; j < num_found && count < k; ++j) {
-      const int index = inliers[found[j]];
-      if (index != static_cast<int>(i)) neighbor_index[i * k + count++] = index;
+    for (int j = 0; j < width && count < k; ++j) {
+      const int index = nearest[i * width + j];
+      if (index < 0) break;
+      if ((*reasons)[index] == EditReason::kKept) {
+        neighbor_index[i * k + count++] = index;
+      }
     }
     if ((*reasons)[i] != EditReason::kKept || count < 3) return;
     std::vector<Eigen::Vector3d> own = {cloud.positions[i]};
@@ -421,6 +439,11 @@ PointCloud EditPointCloud(const PointCloud& cloud,
     // A floor for the deviation's variance, so that noise-free input is not
     // judged against a zero scatter.
     const double min_variance = std::pow(1e-7 * (max - min).norm(), 2);
+    // Spare neighbours for those flagged on the way (2 % blunders leave
+    // about one in a neighbourhood of 24; eight spares cover clusters).
+    const int width = options.surface_fit.num_neighbors + 8;
+    const std::vector<int> nearest =
+        NearestNeighbors(cloud, width, options.num_threads);
     for (int iteration = 1; iteration <= options.surface_fit.num_iterations;
          ++iteration) {
       const Timer pass_timer;
@@ -428,6 +451,8 @@ PointCloud EditPointCloud(const PointCloud& cloud,
       pass.iteration = iteration;
       SurfaceFitPass(cloud,
                      sigmas,
+                     nearest,
+                     width,
                      options.surface_fit,
                      min_variance,
                      options.num_threads,

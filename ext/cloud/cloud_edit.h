@@ -6,7 +6,8 @@
 //
 // kSurfaceFit: in every iteration, around every point a second-order patch
 // in a local frame (local_quadric.h) is fitted to its k nearest neighbours
-// among the points not currently flagged (a k-d tree of PCL), weighted by the
+// among the points not currently flagged (from its k + 8 nearest, found once
+// with PCL's k-d tree), weighted by the
 // neighbours' own precision (the sx, sy, sz attributes of `bayon dense`) when
 // the cloud has them. The point is flagged when its deviation from its patch
 // exceeds `max_deviation_sigma` standard deviations of that deviation
