@@ -124,6 +124,10 @@ int RunMesh(int argc, char** argv) {
                  "cylinder: a point on the axis, x,y,z (default centroid)");
   app.add_option("--cylinder_metric", metric_name, "profile or mean_radius")
       ->transform(CLI::IsMember({"profile", "mean_radius"}));
+  app.add_option("--cone_angle_deg",
+                 options.cylinder.cone_angle_deg,
+                 "cylinder: tilt of the projection above the horizontal (0 = "
+                 "the paper's cylinder; 45 unfolds flat ledge tops)");
   app.add_option("--seam_band_deg",
                  options.cylinder.seam_band_deg,
                  "cylinder: band copied across the +-180 degree seam");

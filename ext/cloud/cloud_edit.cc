@@ -67,10 +67,91 @@ std::vector<int> NearestNeighbors(const PointCloud& cloud,
   return lists;
 }
 
+// The two-face test of SurfaceFitPass for point i: its neighbours
+// `members` split into two faces by 2-means on their (unoriented) normals, a
+// patch per face, and the smallest normalised deviation of the point from a
+// face patch it lies over. False when the normals do not form two faces
+// (less than 20 degrees apart) or the point lies over neither.
+bool TwoFaceDeviation(const PointCloud& cloud,
+                      const std::vector<Eigen::Vector3d>& sigmas,
+                      const std::vector<Eigen::Vector3d>& normals,
+                      const std::vector<int>& members,
+                      size_t i,
+                      double floor,
+                      double spacing,
+                      double* z) {
+  const int m = static_cast<int>(members.size());
+  if (m < 12) return false;
+  // Start from the two most different normals.
+  int a = 0, b = 1;
+  double least = 2;
+  for (int x = 0; x < m; ++x) {
+    for (int y = x + 1; y < m; ++y) {
+      const double c = std::abs(normals[members[x]].dot(normals[members[y]]));
+      if (c < least) {
+        least = c;
+        a = x;
+        b = y;
+      }
+    }
+  }
+  if (least > std::cos(20.0 * M_PI / 180)) return false;
+  Eigen::Vector3d centers[2] = {normals[members[a]], normals[members[b]]};
+  std::vector<int> side(m, 0);
+  for (int round = 0; round < 4; ++round) {
+    Eigen::Vector3d sums[2] = {Eigen::Vector3d::Zero(),
+                               Eigen::Vector3d::Zero()};
+    for (int x = 0; x < m; ++x) {
+      const Eigen::Vector3d& n = normals[members[x]];
+      side[x] = std::abs(n.dot(centers[1])) > std::abs(n.dot(centers[0]));
+      sums[side[x]] += n.dot(centers[side[x]]) >= 0 ? n : Eigen::Vector3d(-n);
+    }
+    for (int c = 0; c < 2; ++c) {
+      if (sums[c].norm() > 0) centers[c] = sums[c].normalized();
+    }
+  }
+  if (std::abs(centers[0].dot(centers[1])) > std::cos(20.0 * M_PI / 180)) {
+    return false;
+  }
+  const bool weighted = !sigmas.empty();
+  const Eigen::Vector3d& p = cloud.positions[i];
+  double best = std::numeric_limits<double>::infinity();
+  for (int c = 0; c < 2; ++c) {
+    std::vector<Eigen::Vector3d> points, point_sigmas;
+    for (int x = 0; x < m; ++x) {
+      if (side[x] != c) continue;
+      points.push_back(cloud.positions[members[x]]);
+      if (weighted) point_sigmas.push_back(sigmas[members[x]]);
+    }
+    if (points.size() < 6) continue;
+    const QuadricPatch patch =
+        FitQuadricPatch(p, points, point_sigmas, centers[c]);
+    if (!patch.valid) continue;
+    // Does the point lie over this face? Its foot is the frame's origin.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& q : points) {
+      const Eigen::Vector3d local = patch.frame.transpose() * (q - p);
+      nearest = std::min(nearest, std::hypot(local.x(), local.y()));
+    }
+    if (nearest > 2 * spacing) continue;
+    const double point_variance =
+        weighted ? VarianceAlong(patch.frame.col(2), sigmas[i]) : 1.0;
+    const double variance = std::max(patch.variance_factor, floor) *
+                            (point_variance + patch.c0_variance);
+    best = std::min(best,
+                    std::abs(patch.QueryDeviation()) /
+                        std::sqrt(std::max(variance, 1e-300)));
+  }
+  if (!std::isfinite(best)) return false;
+  *z = best;
+  return true;
+}
+
 void SurfaceFitPass(const PointCloud& cloud,
                     const std::vector<Eigen::Vector3d>& sigmas,
                     const std::vector<int>& nearest,
                     int width,
+                    double spacing,
                     const SurfaceFitEditOptions& options,
                     double min_variance,
                     int num_threads,
@@ -150,13 +231,43 @@ void SurfaceFitPass(const PointCloud& cloud,
   }
   double floor = Median(std::move(factors));
   if (weighted) floor = std::max(floor, 1.0);
-  std::vector<EditReason> next(n, EditReason::kKept);
-  std::vector<double> normalized(n, -1.0);  // -1: not tested
+  std::vector<double> z(n, -1.0);  // -1: not tested
   for (size_t i = 0; i < n; ++i) {
     if (std::isnan(deviation[i])) continue;
     const double variance =
         std::max(std::max(factor[i], floor) * unit_variance[i], min_variance);
-    normalized[i] = std::abs(deviation[i]) / std::sqrt(variance);
+    z[i] = std::abs(deviation[i]) / std::sqrt(variance);
+  }
+
+  // Where a patch fits its neighbours far worse than is typical (scatter
+  // beyond twice the typical), the neighbourhood may straddle an edge (a
+  // cornice, a step): one quadric across two faces fits neither and its
+  // inflated scatter lets blunders there pass. Such neighbourhoods are
+  // split by their normals into two faces, each gets its own patch, and the
+  // point is judged by the face patch that fits it best among those it lies
+  // over (its foot within two point spacings of the face's points): a good
+  // point fits its own face, a blunder off the edge fits neither.
+  const double tight = 4.0 * floor;
+  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
+    if (!(z[i] >= 0) || factor[i] <= tight) return;
+    std::vector<int> members;
+    for (int j = 0; j < k && neighbor_index[i * k + j] >= 0; ++j) {
+      if (normals[neighbor_index[i * k + j]].squaredNorm() > 0) {
+        members.push_back(neighbor_index[i * k + j]);
+      }
+    }
+    double two_sided;
+    if (TwoFaceDeviation(
+            cloud, sigmas, normals, members, i, floor, spacing, &two_sided)) {
+      z[i] = two_sided;
+    }
+  });
+
+  std::vector<EditReason> next(n, EditReason::kKept);
+  std::vector<double> normalized(n, -1.0);  // -1: not tested
+  for (size_t i = 0; i < n; ++i) {
+    if (!(z[i] >= 0)) continue;
+    normalized[i] = z[i];
     if (normalized[i] > options.max_deviation_sigma) {
       next[i] = EditReason::kDeviationSigma;
     } else if (options.max_deviation_m > 0 &&
@@ -444,6 +555,7 @@ PointCloud EditPointCloud(const PointCloud& cloud,
     const int width = options.surface_fit.num_neighbors + 8;
     const std::vector<int> nearest =
         NearestNeighbors(cloud, width, options.num_threads);
+    const double spacing = MedianPointSpacing(cloud);
     for (int iteration = 1; iteration <= options.surface_fit.num_iterations;
          ++iteration) {
       const Timer pass_timer;
@@ -453,6 +565,7 @@ PointCloud EditPointCloud(const PointCloud& cloud,
                      sigmas,
                      nearest,
                      width,
+                     spacing,
                      options.surface_fit,
                      min_variance,
                      options.num_threads,

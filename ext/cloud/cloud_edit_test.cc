@@ -90,6 +90,56 @@ TEST(CloudEdit, WorksWithoutPrecisionAndComparesWithPcl) {
   EXPECT_GT(report.radius_m, 0);
 }
 
+// A 2 m cube, each side a 20 x 20 grid: sharp edges, where one quadric
+// across two faces fits neither (the two-face test).
+TriangleMesh Cube() {
+  TriangleMesh mesh;
+  const int n = 20;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int sign : {-1, 1}) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      const int base = static_cast<int>(mesh.vertices.size());
+      for (int j = 0; j <= n; ++j) {
+        for (int i = 0; i <= n; ++i) {
+          Eigen::Vector3d p;
+          p(axis) = sign;
+          p(u) = -1 + 2.0 * i / n;
+          p(v) = -1 + 2.0 * j / n;
+          mesh.vertices.positions.push_back(p);
+        }
+      }
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          const int a = base + j * (n + 1) + i, b = a + 1, c = a + n + 2,
+                    d = a + n + 1;
+          if (sign > 0) {
+            mesh.faces.emplace_back(a, b, c);
+            mesh.faces.emplace_back(a, c, d);
+          } else {
+            mesh.faces.emplace_back(a, c, b);
+            mesh.faces.emplace_back(a, d, c);
+          }
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+TEST(CloudEdit, SharpEdges) {
+  Scene scene;
+  scene.truth = Cube();
+  NoisyCloudOptions options;
+  options.num_points = 30000;
+  options.seed = 15;
+  scene.cloud = SampleNoisyCloud(scene.truth, options);
+  CloudEditReport report;
+  const CloudEditEvaluation e =
+      Edit(scene, CloudEditOptions(), "surface_fit (cube)", &report);
+  EXPECT_GE(e.BlundersRemovedFraction(), 0.98);
+  EXPECT_LT(e.GoodRemovedFraction(), 0.005);
+}
+
 TEST(CloudEdit, AbsoluteThreshold) {
   const Scene scene = ReliefCylinderScene(20000, true, 13);
   CloudEditOptions options;

@@ -53,7 +53,7 @@ bool SolvePatch(const std::vector<Eigen::Vector3d>& local,
     return false;
   }
   const Vector c = ldlt.solve(rhs);
-  const Vector e0 = ldlt.solve(Vector::Unit(0));
+  const Matrix inverse = ldlt.solve(Matrix::Identity());
 
   std::vector<double> weighted_squares;
   weighted_squares.reserve(m);
@@ -71,7 +71,19 @@ bool SolvePatch(const std::vector<Eigen::Vector3d>& local,
                    weighted_squares.end());
   patch->variance_factor = weighted_squares[used / 2] / kChiSquare1Median /
                            (1.0 - static_cast<double>(P) / used);
-  patch->c0_variance = e0(0);
+  patch->c0_variance = inverse(0, 0);
+  // Back from the scaled coordinates: c = D c_scaled.
+  Vector unscale;
+  const double unscale_all[6] = {1,
+                                 1 / scale,
+                                 1 / scale,
+                                 1 / (scale * scale),
+                                 1 / (scale * scale),
+                                 1 / (scale * scale)};
+  for (int k = 0; k < P; ++k) unscale(k) = unscale_all[k];
+  patch->covariance.setZero();
+  patch->covariance.template topLeftCorner<P, P>() =
+      unscale.asDiagonal() * inverse * unscale.asDiagonal();
   patch->coefficients.setZero();
   patch->coefficients.template head<P>() = c;
   // Back from the scaled coordinates.
@@ -196,6 +208,32 @@ Eigen::Vector3d MeanAxis(const std::vector<Eigen::Vector3d>& normals) {
   return solver.eigenvectors().col(2);
 }
 
+namespace {
+
+Eigen::Matrix<double, 6, 1> Monomials(double u, double v) {
+  Eigen::Matrix<double, 6, 1> a;
+  a << 1, u, v, u * u, u * v, v * v;
+  return a;
+}
+
+}  // namespace
+
+double QuadricPatch::Deviation(const Eigen::Vector3d& point) const {
+  const Eigen::Vector3d local = frame.transpose() * (point - origin);
+  const double u = local.x(), v = local.y();
+  const Eigen::Matrix<double, 6, 1>& c = coefficients;
+  const double height = Monomials(u, v).dot(c);
+  const double du = c(1) + 2 * c(3) * u + c(4) * v;
+  const double dv = c(2) + c(4) * u + 2 * c(5) * v;
+  return (local.z() - height) / std::sqrt(1 + du * du + dv * dv);
+}
+
+double QuadricPatch::HeightVariance(const Eigen::Vector3d& point) const {
+  const Eigen::Vector3d local = frame.transpose() * (point - origin);
+  const Eigen::Matrix<double, 6, 1> a = Monomials(local.x(), local.y());
+  return a.dot(covariance * a);
+}
+
 double QuadricPatch::QueryDeviation() const {
   const double slope2 =
       coefficients(1) * coefficients(1) + coefficients(2) * coefficients(2);
@@ -262,6 +300,7 @@ QuadricPatch FitQuadricPatch(const Eigen::Vector3d& query,
     residuals = std::move(refit_residuals);
   }
   patch.num_rejected = m - patch.num_points;
+  patch.origin = query;
   return patch;
 }
 

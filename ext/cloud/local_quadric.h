@@ -36,6 +36,11 @@ struct QuadricPatch {
   // Variance of c0 from the normal equations: in m^2 when the weights were
   // 1 / sigma^2, in units of the variance factor when they were 1.
   double c0_variance = 0;
+  // Covariance of the coefficients (same units as c0_variance; rows and
+  // columns of unused coefficients are zero).
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  // The frame's origin: the query point.
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   // Robust a-posteriori variance factor: the median of the weighted squared
   // residuals over the median of chi-square(1) (0.4549), corrected for the
   // redundancy. About 1 when the weights match the scatter around the patch,
@@ -45,6 +50,12 @@ struct QuadricPatch {
   // Signed distance of the query point from the patch along n (positive on
   // the side n points to), first order in the slope at the query point.
   double QueryDeviation() const;
+
+  // Signed distance of any point from the patch along n (first order), and
+  // the variance of the patch's height there (in c0_variance's units):
+  // for testing a point against a neighbour's patch.
+  double Deviation(const Eigen::Vector3d& point) const;
+  double HeightVariance(const Eigen::Vector3d& point) const;
 };
 
 struct QuadricFitOptions {

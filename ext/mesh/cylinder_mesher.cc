@@ -31,60 +31,72 @@ double Median(std::vector<double> values) {
   return values[k];
 }
 
-// Height -> plane y for the kProfile metric: r_mean times the integral of
-// sqrt(1 + r'(h)^2) / r(h) over the median radius profile, piecewise linear
-// between bin centres, extended linearly beyond them.
+// Median of each bin, empty bins filled from their neighbours, then a
+// light 3-bin smoothing (the derivative taken of it amplifies bin noise).
+std::vector<double> SmoothBinMedians(std::vector<std::vector<double>> bins) {
+  const int num_bins = static_cast<int>(bins.size());
+  std::vector<double> m(num_bins, std::numeric_limits<double>::quiet_NaN());
+  for (int b = 0; b < num_bins; ++b) {
+    if (!bins[b].empty()) m[b] = Median(std::move(bins[b]));
+  }
+  int last = -1;
+  for (int b = 0; b < num_bins; ++b) {
+    if (std::isnan(m[b])) continue;
+    for (int e = last + 1; e < b; ++e) {
+      m[e] = last < 0 ? m[b]
+                      : m[last] + (m[b] - m[last]) * (e - last) / (b - last);
+    }
+    last = b;
+  }
+  for (int e = last + 1; e < num_bins; ++e) m[e] = last < 0 ? 0.0 : m[last];
+  std::vector<double> smooth(num_bins);
+  for (int b = 0; b < num_bins; ++b) {
+    const int lo = std::max(0, b - 1), hi = std::min(num_bins - 1, b + 1);
+    double sum = 0;
+    for (int e = lo; e <= hi; ++e) sum += m[e];
+    smooth[b] = sum / (hi - lo + 1);
+  }
+  return smooth;
+}
+
+// Profile coordinate s -> plane y for the kProfile metric: r_mean times the
+// integral of sqrt(1 + t'(s)^2) / r(s) ds over the median profile, t the
+// graph coordinate (distance along the projection direction) and r the
+// distance from the axis, piecewise linear between bin centres, extended
+// linearly beyond them. With a zero cone angle s = h and t = r.
 class ProfileMap {
  public:
-  ProfileMap(const std::vector<double>& heights,
+  ProfileMap(const std::vector<double>& profile,
+             const std::vector<double>& graph,
              const std::vector<double>& radii,
              double mean_radius) {
-    const double h_min = *std::min_element(heights.begin(), heights.end());
-    const double h_max = *std::max_element(heights.begin(), heights.end());
+    const double s_min = *std::min_element(profile.begin(), profile.end());
+    const double s_max = *std::max_element(profile.begin(), profile.end());
     const int num_bins = std::clamp(
-        static_cast<int>(std::sqrt(static_cast<double>(heights.size())) / 2),
+        static_cast<int>(std::sqrt(static_cast<double>(profile.size())) / 2),
         4,
         256);
-    const double width = std::max(h_max - h_min, 1e-12) / num_bins;
-    std::vector<std::vector<double>> bins(num_bins);
-    for (size_t i = 0; i < heights.size(); ++i) {
+    const double width = std::max(s_max - s_min, 1e-12) / num_bins;
+    std::vector<std::vector<double>> graph_bins(num_bins),
+        radius_bins(num_bins);
+    for (size_t i = 0; i < profile.size(); ++i) {
       const int b = std::min(num_bins - 1,
-                             static_cast<int>((heights[i] - h_min) / width));
-      bins[b].push_back(radii[i]);
+                             static_cast<int>((profile[i] - s_min) / width));
+      graph_bins[b].push_back(graph[i]);
+      radius_bins[b].push_back(radii[i]);
     }
-    // Median radius per bin; empty bins from their neighbours.
-    std::vector<double> r(num_bins, -1);
-    for (int b = 0; b < num_bins; ++b) {
-      if (!bins[b].empty()) r[b] = Median(std::move(bins[b]));
-    }
-    int last = -1;
-    for (int b = 0; b < num_bins; ++b) {
-      if (r[b] < 0) continue;
-      for (int e = last + 1; e < b; ++e) {
-        r[e] = last < 0 ? r[b]
-                        : r[last] + (r[b] - r[last]) * (e - last) / (b - last);
-      }
-      last = b;
-    }
-    for (int e = last + 1; e < num_bins; ++e) r[e] = r[last];
-    // A light smoothing: the derivative below amplifies bin noise.
-    std::vector<double> smooth(num_bins);
-    for (int b = 0; b < num_bins; ++b) {
-      const int lo = std::max(0, b - 1), hi = std::min(num_bins - 1, b + 1);
-      double sum = 0;
-      for (int e = lo; e <= hi; ++e) sum += r[e];
-      smooth[b] = sum / (hi - lo + 1);
-    }
+    const std::vector<double> t = SmoothBinMedians(std::move(graph_bins));
+    const std::vector<double> r = SmoothBinMedians(std::move(radius_bins));
     centers_.resize(num_bins);
     values_.resize(num_bins);
     std::vector<double> integrand(num_bins);
     for (int b = 0; b < num_bins; ++b) {
-      centers_[b] = h_min + (b + 0.5) * width;
+      centers_[b] = s_min + (b + 0.5) * width;
       const int lo = std::max(0, b - 1), hi = std::min(num_bins - 1, b + 1);
       const double slope =
-          hi > lo ? (smooth[hi] - smooth[lo]) / ((hi - lo) * width) : 0.0;
+          hi > lo ? (t[hi] - t[lo]) / ((hi - lo) * width) : 0.0;
       integrand[b] = mean_radius * std::sqrt(1 + slope * slope) /
-                     std::max(smooth[b], 1e-3 * mean_radius);
+                     std::max(r[b], 1e-3 * mean_radius);
     }
     values_[0] = 0;
     for (int b = 1; b < num_bins; ++b) {
@@ -140,6 +152,10 @@ void CylinderMeshOptions::Check() const {
               "--axis_direction",
               "a non-zero vector",
               axis_direction.transpose());
+  CheckOption(cone_angle_deg >= 0 && cone_angle_deg < 80,
+              "--cone_angle_deg",
+              "in [0, 80)",
+              cone_angle_deg);
   CheckOption(seam_band_deg > 0 && seam_band_deg <= 90,
               "--seam_band_deg",
               "in (0, 90]",
@@ -203,12 +219,22 @@ TriangleMesh CylinderDelaunayMesh(const PointCloud& cloud,
     return std::round(v / quantum) * quantum;
   };
   const double period = quantise(2 * M_PI * mean_radius);
+  // The profile coordinate s and the graph coordinate t in the half-plane
+  // of each point's angle: t along the projection direction (outward,
+  // tilted up by the cone angle), s across it (up the wall, inward on a
+  // ledge).
+  const double alpha = options.cone_angle_deg * M_PI / 180;
+  std::vector<double> profile(n), graph(n);
+  for (size_t i = 0; i < n; ++i) {
+    profile[i] = height[i] * std::cos(alpha) - radius[i] * std::sin(alpha);
+    graph[i] = height[i] * std::sin(alpha) + radius[i] * std::cos(alpha);
+  }
   std::vector<double> plane_y(n);
   if (options.metric == CylinderMetric::kProfile) {
-    const ProfileMap profile(height, radius, mean_radius);
-    for (size_t i = 0; i < n; ++i) plane_y[i] = quantise(profile(height[i]));
+    const ProfileMap map(profile, graph, radius, mean_radius);
+    for (size_t i = 0; i < n; ++i) plane_y[i] = quantise(map(profile[i]));
   } else {
-    for (size_t i = 0; i < n; ++i) plane_y[i] = quantise(height[i]);
+    for (size_t i = 0; i < n; ++i) plane_y[i] = quantise(profile[i]);
   }
   const double band = period * options.seam_band_deg / 360.0;
   std::vector<std::pair<Kernel::Point_2, int>> plane_points;

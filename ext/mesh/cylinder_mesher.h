@@ -62,6 +62,10 @@ struct CylinderMeshOptions {
   Eigen::Vector3d axis_point =
       Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   CylinderMetric metric = CylinderMetric::kProfile;
+  // Tilt of the projection direction above the horizontal, degrees: 0 is
+  // the paper's cylinder frame (r as a function of angle and height); 45
+  // also unfolds the flat tops of ledges and tiers (see above).
+  double cone_angle_deg = 0;
   // Width of the band copied across the seam, degrees: a few point spacings
   // at least (2 % of the circumference by default).
   double seam_band_deg = 7.2;

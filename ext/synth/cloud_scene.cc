@@ -3,10 +3,12 @@
 
 #include "ext/core/errors.h"
 #include "ext/core/mesh_geometry.h"
+#include "ext/eval/mesh_distance.h"
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <numeric>
 #include <random>
 
@@ -252,10 +254,24 @@ PointCloud SampleNoisyCloud(const TriangleMesh& surface,
   std::uniform_real_distribution<double> offset(options.blunder_min_m,
                                                 options.blunder_max_m);
   std::bernoulli_distribution side(0.5);
+  // A displacement that lands near another part of the surface (into the
+  // wall behind a relief, under a cornice) is no blunder of that size: it is
+  // drawn again (up to 20 times) until the point is at least blunder_min_m
+  // from the whole surface.
+  std::unique_ptr<MeshDistance> distance;
+  if (num_blunders > 0 && options.blunder_min_m > 0) {
+    distance = std::make_unique<MeshDistance>(surface);
+  }
   for (size_t b = 0; b < num_blunders; ++b) {
     const size_t i = order[b];
-    const double d = offset(rng) * (side(rng) ? 1.0 : -1.0);
-    cloud.positions[i] = samples[i].position + d * normals[i];
+    for (int attempt = 0; attempt < 20; ++attempt) {
+      const double d = offset(rng) * (side(rng) ? 1.0 : -1.0);
+      cloud.positions[i] = samples[i].position + d * normals[i];
+      if (!distance || distance->Closest(cloud.positions[i]).distance >=
+                           options.blunder_min_m) {
+        break;
+      }
+    }
     flags[i] = 1.0;
   }
 

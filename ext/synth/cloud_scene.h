@@ -66,7 +66,9 @@ struct NoisyCloudOptions {
   double sigma_m = 0.002;
   double sigma_spread = 0.5;
   // Share of points turned into blunders: moved along the true normal, to
-  // either side, by a distance uniform in [blunder_min_m, blunder_max_m].
+  // either side, by a distance uniform in [blunder_min_m, blunder_max_m]
+  // (drawn again where that lands closer than blunder_min_m to another part
+  // of the surface).
   double blunder_fraction = 0.02;
   double blunder_min_m = 0.01;
   double blunder_max_m = 0.20;
