@@ -38,9 +38,17 @@
 // below min_angle_deg (degenerate slivers where the surface folds back in the
 // cylinder frame).
 //
-// Limitation: the frame needs r to be a function of (theta, h); surfaces
-// that face up or down at one angle (a horizontal ledge) or hide behind
-// other parts of the object in the radial direction fold in the plane.
+// Cone angle: with cone_angle_deg = alpha > 0 each point is projected along
+// a direction tilted up by alpha in the half-plane of its angle: the graph
+// coordinate t = h sin(alpha) + r cos(alpha) takes r's place and the profile
+// coordinate s = h cos(alpha) - r sin(alpha) takes h's place (alpha = 0 is
+// the paper's frame). The flat top of a ledge or tier, which faces up and
+// folds in the cylinder frame, then stays a graph over (theta, s).
+//
+// Limitation: the frame needs t to be a function of (theta, s); surfaces
+// that face away from the projection direction (the underside of a cornice
+// with alpha > 0, a horizontal ledge with alpha = 0) or hide behind other
+// parts of the object fold in the plane.
 #pragma once
 
 #include "ext/core/point_cloud.h"
