@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Grey values and their gradients between pixel centres, for least-squares
+// matching (ext/matching/lsm.h) and everything else that resamples an image
+// at sub-pixel positions and needs the derivative of what it resampled.
+//
+// Coordinates are COLMAP pixel coordinates of the image being sampled: the
+// centre of pixel (col, row) is (col + 0.5, row + 0.5), x right, y down.
+// Images are one channel, CV_32F.
+//
+//   kBilinear  value: bilinear interpolation of the four nearest pixels;
+//              gradient: central differences (g(i+1) - g(i-1)) / 2 at those
+//              four pixels, interpolated bilinearly (a smooth gradient, as
+//              in Gruen 1985, rather than the piecewise constant derivative
+//              of the bilinear surface itself).
+//   kBicubic   value: cubic convolution (Keys 1981, a = -0.5) on the 4 x 4
+//              nearest pixels; gradient: the same convolution of the central
+//              differences. Both reproduce quadratics exactly. (The exact
+//              derivative of the cubic interpolant amplifies pixel noise,
+//              and in least-squares matching that noise, shared with the
+//              resampled values, biases the shifts; measured in
+//              ext/matching/lsm_test.cc.)
+//
+// Bilinear reads the 4 x 4 pixels around the point, so a sample exists
+// where x - 0.5 lies in [1, width - 2) (likewise y; InsideSampleFootprint);
+// bicubic reads 6 x 6, x - 0.5 in [2, width - 3).
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <string>
+
+namespace bayon {
+
+enum class Interpolation { kBilinear, kBicubic };
+
+// "bilinear" / "bicubic"; ParseInterpolation throws InputError naming the
+// choices for any other name.
+const char* InterpolationName(Interpolation interpolation);
+Interpolation ParseInterpolation(const std::string& name);
+
+struct ImageSample {
+  float value = 0;
+  float dx = 0;  // d value / d x, grey values per pixel
+  float dy = 0;
+};
+
+// True where SampleImage has the pixels it needs for kBilinear.
+inline bool InsideSampleFootprint(const cv::Mat& image, double x, double y) {
+  const double u = x - 0.5;
+  const double v = y - 0.5;
+  return u >= 1.0 && v >= 1.0 && u < image.cols - 2.0 && v < image.rows - 2.0;
+}
+
+// The bicubic gradient reads one more pixel on each side (6 x 6).
+inline bool InsideBicubicGradientFootprint(const cv::Mat& image,
+                                           double x,
+                                           double y) {
+  const double u = x - 0.5;
+  const double v = y - 0.5;
+  return u >= 2.0 && v >= 2.0 && u < image.cols - 3.0 && v < image.rows - 3.0;
+}
+
+// The value and gradient at (x, y). Returns false (and leaves `sample`
+// unchanged) where the footprint leaves the image.
+bool SampleImage(const cv::Mat& image,
+                 double x,
+                 double y,
+                 Interpolation interpolation,
+                 ImageSample* sample);
+
+// How much of the variance of white pixel noise survives interpolation at
+// (x, y): the sum of the squared interpolation weights (1 at pixel
+// centres, down to 0.25 for bilinear midway between four pixels).
+double InterpolationNoiseGain(Interpolation interpolation, double x, double y);
+
+// The value alone by bilinear interpolation (2 x 2 footprint: x - 0.5 in
+// [0, width - 1), likewise y). Returns false outside.
+inline bool SampleBilinear(const cv::Mat& image,
+                           double x,
+                           double y,
+                           float* value) {
+  const double u = x - 0.5;
+  const double v = y - 0.5;
+  if (!(u >= 0.0 && v >= 0.0 && u < image.cols - 1.0 && v < image.rows - 1.0)) {
+    return false;
+  }
+  const int ix = static_cast<int>(u);
+  const int iy = static_cast<int>(v);
+  const float fx = static_cast<float>(u - ix);
+  const float fy = static_cast<float>(v - iy);
+  const float* r0 = image.ptr<float>(iy) + ix;
+  const float* r1 = image.ptr<float>(iy + 1) + ix;
+  *value = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
+           fy * ((1 - fx) * r1[0] + fx * r1[1]);
+  return true;
+}
+
+}  // namespace bayon

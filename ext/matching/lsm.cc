@@ -1,0 +1,472 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/matching/lsm.h"
+
+#include "ext/core/errors.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <glog/logging.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace bayon {
+
+const char* LsmParamName(int param) {
+  static const char* const kNames[kNumLsmParams] = {
+      "a0", "b0", "a1", "a2", "b1", "b2", "r0", "r1"};
+  return param >= 0 && param < kNumLsmParams ? kNames[param] : "?";
+}
+
+const char* LsmStatusName(LsmStatus status) {
+  switch (status) {
+    case LsmStatus::kConverged:
+      return "converged";
+    case LsmStatus::kOutsideImage:
+      return "outside_image";
+    case LsmStatus::kFlatPatch:
+      return "flat_patch";
+    case LsmStatus::kShiftUndetermined:
+      return "shift_undetermined";
+    case LsmStatus::kNotConverged:
+      return "not_converged";
+    case LsmStatus::kDiverged:
+      return "diverged";
+    case LsmStatus::kSingular:
+      return "singular";
+  }
+  return "?";
+}
+
+LsmParameters LsmParameters::At(const Eigen::Vector2d& xy,
+                                const Eigen::Matrix2d& shape) {
+  LsmParameters params;
+  params.affine.leftCols<2>() = shape;
+  params.affine.col(2) = xy;
+  return params;
+}
+
+LsmVector LsmParameters::AsVector() const {
+  LsmVector v;
+  v[kLsmA0] = affine(0, 2);
+  v[kLsmB0] = affine(1, 2);
+  v[kLsmA1] = affine(0, 0);
+  v[kLsmA2] = affine(0, 1);
+  v[kLsmB1] = affine(1, 0);
+  v[kLsmB2] = affine(1, 1);
+  v[kLsmR0] = r0;
+  v[kLsmR1] = r1;
+  return v;
+}
+
+void LsmParameters::Add(const LsmVector& delta) {
+  affine(0, 2) += delta[kLsmA0];
+  affine(1, 2) += delta[kLsmB0];
+  affine(0, 0) += delta[kLsmA1];
+  affine(0, 1) += delta[kLsmA2];
+  affine(1, 0) += delta[kLsmB1];
+  affine(1, 1) += delta[kLsmB2];
+  r0 += delta[kLsmR0];
+  r1 += delta[kLsmR1];
+}
+
+bool ExtractLsmTemplate(const cv::Mat& image,
+                        const Eigen::Vector2d& center,
+                        int radius,
+                        Interpolation interpolation,
+                        LsmTemplate* patch) {
+  CHECK_EQ(image.type(), CV_32F);
+  const int side = 2 * radius + 1;
+  patch->center = center;
+  patch->radius = radius;
+  patch->values.resize(side * side);
+  patch->dx.resize(side * side);
+  patch->dy.resize(side * side);
+  double sum = 0, sum_sq = 0;
+  int k = 0;
+  for (int v = -radius; v <= radius; ++v) {
+    for (int u = -radius; u <= radius; ++u, ++k) {
+      ImageSample sample;
+      if (!SampleImage(
+              image, center.x() + u, center.y() + v, interpolation, &sample)) {
+        return false;
+      }
+      patch->values[k] = sample.value;
+      patch->dx[k] = sample.dx;
+      patch->dy[k] = sample.dy;
+      sum += sample.value;
+      sum_sq += static_cast<double>(sample.value) * sample.value;
+    }
+  }
+  const double n = side * side;
+  patch->mean = sum / n;
+  patch->stddev =
+      std::sqrt(std::max(0.0, sum_sq / n - patch->mean * patch->mean));
+  return true;
+}
+
+double LsmNormalEquations::Correlation() const {
+  const double n = num_observations;
+  if (n < 2) return 0;
+  const double cov = sum_fg - sum_f * sum_g / n;
+  const double var_f = sum_ff - sum_f * sum_f / n;
+  const double var_g = sum_gg - sum_g * sum_g / n;
+  if (var_f <= 0 || var_g <= 0) return 0;
+  return cov / std::sqrt(var_f * var_g);
+}
+
+bool BuildLsmNormalEquations(const LsmTemplate& patch,
+                             const cv::Mat& search,
+                             const LsmParameters& params,
+                             Interpolation interpolation,
+                             LsmNormalEquations* equations) {
+  const int r = patch.radius;
+  const auto& a = params.affine;
+  // Accumulate the upper triangle of A'A in plain arrays (faster than a
+  // rank update per sample) and mirror it at the end.
+  double n_upper[kNumLsmParams][kNumLsmParams] = {};
+  double rhs[kNumLsmParams] = {};
+  double residual_sq = 0;
+  double sum_f = 0, sum_g = 0, sum_ff = 0, sum_gg = 0, sum_fg = 0;
+  double noise_gain_sum = 0;
+  int k = 0;
+  for (int v = -r; v <= r; ++v) {
+    for (int u = -r; u <= r; ++u, ++k) {
+      const double x = a(0, 2) + a(0, 0) * u + a(0, 1) * v;
+      const double y = a(1, 2) + a(1, 0) * u + a(1, 1) * v;
+      ImageSample sample;
+      if (!SampleImage(search, x, y, interpolation, &sample)) return false;
+      const double f = patch.values[k];
+      const double g = sample.value;
+      const double gx = params.r1 * sample.dx;
+      const double gy = params.r1 * sample.dy;
+      const double row[kNumLsmParams] = {
+          gx, gy, gx * u, gx * v, gy * u, gy * v, 1.0, g};
+      const double l = f - params.r0 - params.r1 * g;
+      for (int i = 0; i < kNumLsmParams; ++i) {
+        for (int j = i; j < kNumLsmParams; ++j) {
+          n_upper[i][j] += row[i] * row[j];
+        }
+        rhs[i] += row[i] * l;
+      }
+      residual_sq += l * l;
+      sum_f += f;
+      sum_g += g;
+      sum_ff += f * f;
+      sum_gg += g * g;
+      sum_fg += f * g;
+      noise_gain_sum += InterpolationNoiseGain(interpolation, x, y);
+    }
+  }
+  for (int i = 0; i < kNumLsmParams; ++i) {
+    for (int j = i; j < kNumLsmParams; ++j) {
+      equations->N(i, j) = equations->N(j, i) = n_upper[i][j];
+    }
+    equations->rhs[i] = rhs[i];
+  }
+  equations->residual_sq = residual_sq;
+  equations->num_observations = patch.size();
+  equations->sum_f = sum_f;
+  equations->sum_g = sum_g;
+  equations->sum_ff = sum_ff;
+  equations->sum_gg = sum_gg;
+  equations->sum_fg = sum_fg;
+  equations->noise_gain_sum = noise_gain_sum;
+  return true;
+}
+
+void LsmOptions::Check() const {
+  CheckOption(patch_radius >= 2 && patch_radius <= 50,
+              "LsmOptions.patch_radius",
+              "in [2, 50]",
+              patch_radius);
+  CheckOption(
+      max_iterations >= 1, "LsmOptions.max_iterations", ">= 1", max_iterations);
+  CheckOption(
+      convergence_px > 0, "LsmOptions.convergence_px", "> 0", convergence_px);
+  CheckOption(min_pivot > 0 && min_pivot < 1,
+              "LsmOptions.min_pivot",
+              "in (0, 1)",
+              min_pivot);
+  CheckOption(
+      min_shift_information_ratio > 0 && min_shift_information_ratio < 1,
+      "LsmOptions.min_shift_information_ratio",
+      "in (0, 1)",
+      min_shift_information_ratio);
+  CheckOption(min_template_stddev >= 0,
+              "LsmOptions.min_template_stddev",
+              ">= 0",
+              min_template_stddev);
+  CheckOption(max_shift_px > 0, "LsmOptions.max_shift_px", "> 0", max_shift_px);
+  CheckOption(min_shape_scale > 0 && min_shape_scale < 1,
+              "LsmOptions.min_shape_scale",
+              "in (0, 1)",
+              min_shape_scale);
+  CheckOption(max_shape_scale > 1,
+              "LsmOptions.max_shape_scale",
+              "> 1",
+              max_shape_scale);
+}
+
+namespace {
+
+// Conditional information of parameter j given the parameters in `taken`:
+// the Schur complement N_jj - N_jS N_SS^-1 N_Sj.
+double ConditionalInformation(const LsmMatrix& N,
+                              const std::vector<int>& taken,
+                              int j) {
+  if (taken.empty()) return N(j, j);
+  const int m = static_cast<int>(taken.size());
+  Eigen::MatrixXd nss(m, m);
+  Eigen::VectorXd nsj(m);
+  for (int a = 0; a < m; ++a) {
+    for (int b = 0; b < m; ++b) nss(a, b) = N(taken[a], taken[b]);
+    nsj[a] = N(taken[a], j);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(nss);
+  return N(j, j) - nsj.dot(ldlt.solve(nsj));
+}
+
+std::vector<int> FreeIndices(const std::array<bool, kNumLsmParams>& held) {
+  std::vector<int> free;
+  for (int i = 0; i < kNumLsmParams; ++i) {
+    if (!held[i]) free.push_back(i);
+  }
+  return free;
+}
+
+}  // namespace
+
+std::array<bool, kNumLsmParams> SelectLsmParameters(
+    const LsmMatrix& N_in,
+    const std::array<bool, kNumLsmParams>& enabled,
+    const LsmOptions& options) {
+  // Radiometry in centred form, r1 against g - mean(g): whether the scale is
+  // determinable must not depend on how bright the patch is. The column of
+  // r0 is all ones, so N(r0, r0) = n and N(r0, r1) = sum g.
+  LsmMatrix N = N_in;
+  if (N(kLsmR0, kLsmR0) > 0) {
+    const double mean_g = N(kLsmR0, kLsmR1) / N(kLsmR0, kLsmR0);
+    LsmMatrix T = LsmMatrix::Identity();
+    T(kLsmR0, kLsmR1) = -mean_g;
+    N = T.transpose() * N * T;
+  }
+  std::array<bool, kNumLsmParams> held;
+  held.fill(true);
+  std::vector<int> taken;
+  auto accept = [&](int j) {
+    held[j] = false;
+    taken.push_back(j);
+  };
+  // Shifts: the better determined first, the other one only if it carries
+  // enough information of its own.
+  int first = kLsmA0, second = kLsmB0;
+  if (N(kLsmB0, kLsmB0) > N(kLsmA0, kLsmA0)) std::swap(first, second);
+  if (enabled[first] && N(first, first) > 0) {
+    accept(first);
+    if (enabled[second]) {
+      const double s = ConditionalInformation(N, taken, second);
+      if (s >= options.min_shift_information_ratio * N(first, first)) {
+        accept(second);
+      }
+    }
+  } else if (enabled[second] && N(second, second) > 0) {
+    accept(second);
+  }
+  for (int j : {kLsmR0, kLsmR1, kLsmA1, kLsmB2, kLsmA2, kLsmB1}) {
+    if (!enabled[j] || !(N(j, j) > 0)) continue;
+    const double s = ConditionalInformation(N, taken, j);
+    if (s > options.min_pivot * N(j, j)) accept(j);
+  }
+  return held;
+}
+
+namespace {
+
+bool ShapeWithinBounds(const Eigen::Matrix2d& shape,
+                       const Eigen::Matrix2d& approximation,
+                       const LsmOptions& options) {
+  const double det = approximation.determinant();
+  if (!(std::abs(det) > 1e-12)) return false;
+  const Eigen::Matrix2d relative = shape * approximation.inverse();
+  if (relative.determinant() <= 0) return false;  // patch turned inside out
+  const Eigen::Vector2d singular =
+      Eigen::JacobiSVD<Eigen::Matrix2d>(relative).singularValues();
+  return singular[1] >= options.min_shape_scale &&
+         singular[0] <= options.max_shape_scale;
+}
+
+}  // namespace
+
+LsmMatch MatchLsm(const LsmTemplate& patch,
+                  const cv::Mat& search,
+                  const LsmParameters& approximation,
+                  const LsmOptions& options) {
+  LsmMatch match;
+  match.params = approximation;
+  match.xy = approximation.Position();
+  if (patch.stddev < options.min_template_stddev) {
+    match.status = LsmStatus::kFlatPatch;
+    return match;
+  }
+  std::array<bool, kNumLsmParams> enabled;
+  enabled.fill(true);
+  for (int j : {kLsmA1, kLsmA2, kLsmB1, kLsmB2}) {
+    enabled[j] = options.estimate_shape;
+  }
+  enabled[kLsmR0] = enabled[kLsmR1] = options.estimate_radiometry;
+
+  LsmParameters params = approximation;
+  LsmNormalEquations equations;
+  std::array<bool, kNumLsmParams> held{};
+  bool converged = false;
+  const double r = patch.radius;
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    match.iterations = iteration;
+    if (!BuildLsmNormalEquations(
+            patch, search, params, options.interpolation, &equations)) {
+      match.status = LsmStatus::kOutsideImage;
+      match.params = params;
+      match.xy = params.Position();
+      return match;
+    }
+    held = SelectLsmParameters(equations.N, enabled, options);
+    const std::vector<int> free = FreeIndices(held);
+    if (free.empty()) {
+      match.status = LsmStatus::kSingular;
+      return match;
+    }
+    const int m = static_cast<int>(free.size());
+    Eigen::MatrixXd nr(m, m);
+    Eigen::VectorXd br(m);
+    for (int a = 0; a < m; ++a) {
+      for (int b = 0; b < m; ++b) nr(a, b) = equations.N(free[a], free[b]);
+      br[a] = equations.rhs[free[a]];
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(nr);
+    if (ldlt.info() != Eigen::Success) {
+      match.status = LsmStatus::kSingular;
+      return match;
+    }
+    const Eigen::VectorXd dr = ldlt.solve(br);
+    LsmVector delta = LsmVector::Zero();
+    for (int a = 0; a < m; ++a) delta[free[a]] = dr[a];
+    if (!delta.allFinite()) {
+      match.status = LsmStatus::kSingular;
+      return match;
+    }
+    params.Add(delta);
+    if ((params.Position() - approximation.Position()).norm() >
+            options.max_shift_px ||
+        !ShapeWithinBounds(params.Shape(), approximation.Shape(), options) ||
+        !(params.r1 > 0)) {
+      match.status = LsmStatus::kDiverged;
+      match.params = params;
+      match.xy = params.Position();
+      return match;
+    }
+    const double shift_change = std::hypot(delta[kLsmA0], delta[kLsmB0]);
+    const double corner_change =
+        r * (std::abs(delta[kLsmA1]) + std::abs(delta[kLsmA2]) +
+             std::abs(delta[kLsmB1]) + std::abs(delta[kLsmB2]));
+    if (shift_change < options.convergence_px &&
+        corner_change < options.convergence_px) {
+      converged = true;
+      break;
+    }
+  }
+  match.params = params;
+  match.xy = params.Position();
+  match.held = held;
+
+  // Statistics at the final estimate: residuals, sigma0 and the covariance
+  // of the parameters estimated in the last iteration.
+  if (!BuildLsmNormalEquations(
+          patch, search, params, options.interpolation, &equations)) {
+    match.status = LsmStatus::kOutsideImage;
+    return match;
+  }
+  const std::vector<int> free = FreeIndices(held);
+  const int m = static_cast<int>(free.size());
+  Eigen::MatrixXd nr(m, m);
+  Eigen::VectorXd br(m);
+  for (int a = 0; a < m; ++a) {
+    for (int b = 0; b < m; ++b) nr(a, b) = equations.N(free[a], free[b]);
+    br[a] = equations.rhs[free[a]];
+  }
+  const Eigen::MatrixXd q = nr.inverse();
+  const double vtv = std::max(0.0, equations.residual_sq - br.dot(q * br));
+  match.num_observations = equations.num_observations;
+  match.redundancy = equations.num_observations - m;
+  match.sigma0 = match.redundancy > 0 ? std::sqrt(vtv / match.redundancy) : 0.0;
+  if (options.correct_resampling_noise && equations.num_observations > 0) {
+    const double kept = equations.noise_gain_sum / equations.num_observations;
+    const double r1_sq = params.r1 * params.r1;
+    match.sigma0 *= std::sqrt((1 + r1_sq) / (1 + r1_sq * kept));
+  }
+  match.correlation = equations.Correlation();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < m; ++a) {
+    match.sigma[free[a]] = match.sigma0 * std::sqrt(std::max(0.0, q(a, a)));
+  }
+  int index_of[kNumLsmParams];
+  std::fill(index_of, index_of + kNumLsmParams, -1);
+  for (int a = 0; a < m; ++a) index_of[free[a]] = a;
+  const int ia = index_of[kLsmA0], ib = index_of[kLsmB0];
+  match.covariance_xy.setZero();
+  match.covariance_xy(0, 0) =
+      ia >= 0 ? match.sigma0 * match.sigma0 * q(ia, ia) : inf;
+  match.covariance_xy(1, 1) =
+      ib >= 0 ? match.sigma0 * match.sigma0 * q(ib, ib) : inf;
+  if (ia >= 0 && ib >= 0) {
+    match.covariance_xy(0, 1) = match.covariance_xy(1, 0) =
+        match.sigma0 * match.sigma0 * q(ia, ib);
+  }
+  match.sigma_xy = Eigen::Vector2d(std::sqrt(match.covariance_xy(0, 0)),
+                                   std::sqrt(match.covariance_xy(1, 1)));
+  if (!converged) {
+    match.status = LsmStatus::kNotConverged;
+  } else if (held[kLsmA0] || held[kLsmB0]) {
+    match.status = LsmStatus::kShiftUndetermined;
+  } else {
+    match.status = LsmStatus::kConverged;
+  }
+  return match;
+}
+
+LsmMatch MatchLsm(const cv::Mat& template_image,
+                  const Eigen::Vector2d& template_xy,
+                  const cv::Mat& search,
+                  const LsmParameters& approximation,
+                  const LsmOptions& options) {
+  LsmTemplate patch;
+  if (!ExtractLsmTemplate(template_image,
+                          template_xy,
+                          options.patch_radius,
+                          options.interpolation,
+                          &patch)) {
+    LsmMatch match;
+    match.status = LsmStatus::kOutsideImage;
+    match.params = approximation;
+    match.xy = approximation.Position();
+    return match;
+  }
+  return MatchLsm(patch, search, approximation, options);
+}
+
+std::vector<LsmMatch> MatchLsmMulti(const LsmTemplate& patch,
+                                    const std::vector<LsmSearch>& searches,
+                                    const LsmOptions& options) {
+  std::vector<LsmMatch> matches;
+  matches.reserve(searches.size());
+  for (const LsmSearch& search : searches) {
+    CHECK(search.image != nullptr);
+    matches.push_back(
+        MatchLsm(patch, *search.image, search.approximation, options));
+  }
+  return matches;
+}
+
+}  // namespace bayon
