@@ -7,13 +7,13 @@
 #include "ext/colmap/table_matches.h"
 #include "ext/colmap/table_relative.h"
 #include "ext/core/errors.h"
+#include "ext/eval/ground_truth_import.h"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 
 #include "tests/testing.h"
@@ -23,27 +23,24 @@ namespace fs = std::filesystem;
 namespace bayon {
 namespace {
 
-// The temple ring's calibration (templeSR_par.txt): x = K [R | t] X with the
-// image origin at the centre of the top-left pixel, so COLMAP pixels are
-// Middlebury's plus 0.5.
+// The temple ring's calibration (templeSR_par.txt) as the importer reads
+// it, in COLMAP pixels: x = K [R | t] X.
 struct TrueCamera {
   Eigen::Matrix3d K, R;
   Eigen::Vector3d t;
 };
 
 std::map<std::string, TrueCamera> ReadTempleCameras() {
-  std::ifstream in(testing::DataPath("temple-ring/templeSR_par.txt"));
-  int num_images = 0;
-  in >> num_images;
+  GroundTruthImportOptions options;
+  options.format = GroundTruthFormat::kMiddlebury;
   std::map<std::string, TrueCamera> cameras;
-  for (int i = 0; i < num_images; ++i) {
-    std::string name;
+  for (const GroundTruthView& view : ReadMiddleburyCameras(
+           testing::DataPath("temple-ring/templeSR_par.txt"), options)) {
     TrueCamera camera;
-    in >> name;
-    for (int r = 0; r < 9; ++r) in >> camera.K(r / 3, r % 3);
-    for (int r = 0; r < 9; ++r) in >> camera.R(r / 3, r % 3);
-    for (int r = 0; r < 3; ++r) in >> camera.t(r);
-    cameras[name] = camera;
+    camera.K = view.K;
+    camera.R = view.cam_from_world.rotation.toRotationMatrix();
+    camera.t = view.cam_from_world.translation;
+    cameras[view.name] = camera;
   }
   EXPECT_EQ(cameras.size(), 16u);
   return cameras;
@@ -59,9 +56,8 @@ double TrueEpipolarDistance(const TrueCamera& a,
   Eigen::Matrix3d tx;
   tx << 0, -t(2), t(1), t(2), 0, -t(0), -t(1), t(0), 0;
   const Eigen::Matrix3d F = b.K.inverse().transpose() * tx * R * a.K.inverse();
-  const Eigen::Vector3d line = F * (x1.array() - 0.5).matrix().homogeneous();
-  return std::abs((x2.array() - 0.5).matrix().homogeneous().dot(line)) /
-         line.head<2>().norm();
+  const Eigen::Vector3d line = F * x1.homogeneous();
+  return std::abs(x2.homogeneous().dot(line)) / line.head<2>().norm();
 }
 
 // Angle between the two stations as seen from the object, degrees.
@@ -100,10 +96,8 @@ std::string TempleMatchedFixture() {
           const TrueCamera truth = ReadTempleCameras().begin()->second;
           Database database(db, Database::Mode::kReadWrite);
           Camera camera = database.ReadCamera(1);
-          camera.params = {truth.K(0, 0),
-                           truth.K(1, 1),
-                           truth.K(0, 2) + 0.5,
-                           truth.K(1, 2) + 0.5};
+          camera.params = {
+              truth.K(0, 0), truth.K(1, 1), truth.K(0, 2), truth.K(1, 2)};
           camera.has_prior_focal_length = true;
           database.UpdateCamera(camera);
         }
@@ -225,10 +219,12 @@ TEST(Orientation, TempleRelativeOrientationsAgreeWithTheCalibration) {
     EXPECT_EQ(database.ExistsTwoViewGeometry(id1, id2), record.success);
     if (!record.success) continue;
     ++num_oriented;
-    // Only ring neighbours (up to 45 degrees apart, about 50 from the
-    // bounding box centre) can be oriented; anything else is a false
-    // geometry from chance matches.
-    EXPECT_LT(StationAngleDeg(a, b), 50.0) << names[id1] << " " << names[id2];
+    // Ring neighbours are up to 45 degrees apart (about 50 from the
+    // bounding box centre); since the correlation also tries windows shifted
+    // by a pixel, pairs a little wider get enough points too (templeSR0001 -
+    // templeSR0010, 54 degrees, 0.25 deg rotation error). A false geometry
+    // from chance matches, whatever the angle, fails the error bounds below.
+    EXPECT_LT(StationAngleDeg(a, b), 60.0) << names[id1] << " " << names[id2];
     const Eigen::Matrix3d R = b.R * a.R.transpose();
     const Eigen::Vector3d t = b.t - R * a.t;
     const double rotation_error =
