@@ -1,21 +1,51 @@
 // SPDX-License-Identifier: BSD-3-Clause
+//
+// `bayon evaluate`: every product of a run against the truth. The truth is a
+// COLMAP model, or a synthetic workspace's gt/ folder (sparse/, surface.ply
+// and its texture, heldout/, calibration.json, synth.json), from which the
+// other truth files default. Dense clouds, meshes and textured models made
+// from the evaluated sparse model are brought into the truth's datum by the
+// same similarity as the cameras (with --align 1 and --input_path); without
+// a sparse model they are taken to be in the truth's datum already.
+#include "ext/colmap/calibration_json.h"
 #include "ext/colmap/model_io.h"
+#include "ext/colmap/ply_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/eval/calibration_eval.h"
+#include "ext/eval/mesh_distance.h"
 #include "ext/eval/sparse_eval.h"
+#include "ext/eval/surface_eval.h"
+#include "ext/eval/texture_eval.h"
+#include "ext/image/image_io.h"
 #include "tools/command.h"
 #include "tools/commands.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <optional>
 
 namespace bayon {
 namespace {
 
-nlohmann::ordered_json SparseToJson(const SparseEvaluation& e) {
-  nlohmann::ordered_json json;
+namespace fs = std::filesystem;
+using Json = nlohmann::ordered_json;
+
+Json Statistics(const DistanceStatistics& s) {
+  return {{"count", s.count},
+          {"mean", s.mean},
+          {"rms", s.rms},
+          {"median", s.median},
+          {"p95", s.p95},
+          {"max", s.max}};
+}
+
+Json SparseToJson(const SparseEvaluation& e) {
+  Json json;
   json["num_truth_images"] = e.num_truth_images;
   json["num_registered"] = e.num_registered;
   json["num_model_points"] = e.num_model_points;
@@ -36,13 +66,66 @@ nlohmann::ordered_json SparseToJson(const SparseEvaluation& e) {
   json["center_max_relative"] = e.center_max_relative;
   json["rotation_rms_deg"] = e.rotation_rms_deg;
   json["rotation_max_deg"] = e.rotation_max_deg;
-  json["images"] = nlohmann::ordered_json::array();
+  json["images"] = Json::array();
   for (const ImageEvaluation& image : e.images) {
     json["images"].push_back(
         {{"name", image.name},
          {"registered", image.registered},
          {"center_error", image.center_error},
          {"rotation_error_deg", image.rotation_error_deg}});
+  }
+  return json;
+}
+
+Json CalibrationToJson(const CalibrationEvaluation& e) {
+  Json json = {{"camera_id", e.camera_id},
+               {"model", e.model},
+               {"truth_model", e.truth_model},
+               {"max_abs_error_over_sigma", e.max_abs_ratio}};
+  json["parameters"] = Json::array();
+  for (const ParameterError& p : e.parameters) {
+    Json row = {{"name", p.name},
+                {"estimate", p.estimate},
+                {"truth", p.truth},
+                {"error", p.error}};
+    if (p.sigma > 0) {
+      row["sigma"] = p.sigma;
+      row["error_over_sigma"] = p.ratio;
+    }
+    json["parameters"].push_back(row);
+  }
+  return json;
+}
+
+Json TopologyToJson(const MeshTopology& t) {
+  return {{"vertices", t.num_vertices},
+          {"faces", t.num_faces},
+          {"boundary_loops", t.num_boundary_loops},
+          {"non_manifold_edges", t.num_non_manifold_edges},
+          {"non_manifold_vertices", t.num_non_manifold_vertices},
+          {"components", t.num_components},
+          {"manifold", t.IsManifold()},
+          {"closed", t.IsClosed()}};
+}
+
+Json SurfaceToJson(const SurfaceEvaluation& e) {
+  Json json = {{"num_points", e.num_points},
+               {"num_points_outside_region", e.num_points_outside_region},
+               {"accuracy_m", Statistics(e.accuracy)},
+               {"completeness_m", Statistics(e.completeness)},
+               {"completeness_fraction", e.completeness_fraction},
+               {"completeness_threshold_m", e.completeness_threshold_m},
+               {"num_visible_true_samples", e.num_visible_samples}};
+  if (e.gsd_m > 0) {
+    json["gsd_m"] = e.gsd_m;
+    json["accuracy_gsd"] = {{"mean", e.accuracy.mean / e.gsd_m},
+                            {"rms", e.accuracy.rms / e.gsd_m},
+                            {"median", e.accuracy.median / e.gsd_m},
+                            {"p95", e.accuracy.p95 / e.gsd_m}};
+  }
+  if (e.is_mesh) {
+    json["topology"] = TopologyToJson(e.topology);
+    json["truth_topology"] = TopologyToJson(e.truth_topology);
   }
   return json;
 }
@@ -65,38 +148,327 @@ void PrintSparseTable(const std::string& label, const SparseEvaluation& e) {
               e.rotation_rms_deg);
 }
 
+void PrintTopology(const char* label, const MeshTopology& t) {
+  std::printf(
+      "  %-6s %zu faces, %zu boundary loops, %zu non-manifold edges, "
+      "%zu non-manifold vertices: %s\n",
+      label,
+      t.num_faces,
+      t.num_boundary_loops,
+      t.num_non_manifold_edges,
+      t.num_non_manifold_vertices,
+      t.IsClosed() ? "closed"
+                   : (t.IsManifold() ? "manifold, open" : "not manifold"));
+}
+
+// The truth files: explicit paths win, else the members of a gt/ folder.
+struct TruthPaths {
+  std::string model, surface, texture, heldout, calibration, synth_json;
+};
+
+TruthPaths FindTruth(const std::string& ground_truth_path) {
+  TruthPaths truth;
+  const fs::path root(ground_truth_path);
+  if (!fs::is_directory(root)) {
+    ThrowInputError(ground_truth_path, ": the ground truth is not a folder");
+  }
+  auto member = [&](const char* name) {
+    const fs::path path = root / name;
+    return fs::exists(path) ? path.string() : std::string();
+  };
+  truth.model = fs::is_directory(root / "sparse") ? (root / "sparse").string()
+                                                  : root.string();
+  truth.surface = member("surface.ply");
+  truth.heldout = member("heldout");
+  truth.calibration = member("calibration.json");
+  truth.synth_json = member("synth.json");
+  return truth;
+}
+
+// The evaluation region and GSD that `bayon synth` records.
+void ReadSynthDescription(const std::string& path,
+                          Eigen::AlignedBox3d* region,
+                          double* gsd_m) {
+  std::ifstream in(path);
+  Json json;
+  try {
+    json = Json::parse(in);
+    if (json.contains("evaluation_region")) {
+      const Json& r = json["evaluation_region"];
+      *region = Eigen::AlignedBox3d(
+          Eigen::Vector3d(r["min"][0], r["min"][1], r["min"][2]),
+          Eigen::Vector3d(r["max"][0], r["max"][1], r["max"][2]));
+    }
+    if (json.contains("gsd_m")) *gsd_m = json["gsd_m"].get<double>();
+  } catch (const Json::exception& e) {
+    ThrowInputError(path, ": not a synth description (", e.what(), ")");
+  }
+}
+
+void Transform(const Sim3d& b_from_a, PointCloud* cloud) {
+  for (Eigen::Vector3d& p : cloud->positions) p = b_from_a * p;
+  for (Eigen::Vector3f& n : cloud->normals) {
+    n = (b_from_a.rotation.cast<float>() * n).normalized();
+  }
+}
+
 }  // namespace
 
 int RunEvaluate(int argc, char** argv) {
   std::string input_path, ground_truth_path, output_path, label;
+  std::string calibration_path, surface_path, cloud_path, mesh_path;
+  std::string textured_mesh_path, texture_path, heldout_path, render_path;
   bool align = true;
-  CommandLine command("evaluate",
-                      "Compare a sparse model with the ground truth: images "
-                      "registered, camera centre and rotation errors after a "
-                      "7-parameter similarity. Prints a table, writes JSON.");
+  double gsd_m = 0, threshold_m = 0, threshold_gsd = 2;
+  int num_samples = 200000, num_threads = -1;
+  CommandLine command(
+      "evaluate",
+      "Compare results with the ground truth: a sparse model (registered "
+      "images, camera centre and rotation errors after a 7-parameter "
+      "similarity, calibration per parameter, 3D points against the true "
+      "surface), a dense cloud and a mesh (accuracy, completeness over the "
+      "visible true surface, topology) and a textured model (PSNR and SSIM "
+      "of renders from held-out viewpoints). Prints tables, writes JSON.");
   CLI::App& app = command.app();
-  app.add_option("--input_path", input_path, "Model to evaluate")->required();
   app.add_option("--ground_truth_path",
                  ground_truth_path,
-                 "True model (e.g. W/gt/sparse)")
+                 "True model folder, or a synthetic workspace's gt/ folder")
       ->required();
+  app.add_option("--input_path", input_path, "Sparse model to evaluate");
+  app.add_option("--calibration_path",
+                 calibration_path,
+                 "calibration.json of the model (default: the one beside it)");
+  app.add_option("--cloud_path", cloud_path, "Dense cloud (PLY) to evaluate");
+  app.add_option("--mesh_path", mesh_path, "Mesh (PLY) to evaluate");
+  app.add_option("--textured_mesh_path",
+                 textured_mesh_path,
+                 "Textured model (PLY with texcoord and a TextureFile "
+                 "comment, or per-vertex colours)");
+  app.add_option("--texture_path",
+                 texture_path,
+                 "Its texture atlas (default: the PLY's TextureFile)");
+  app.add_option("--surface_path",
+                 surface_path,
+                 "True surface (default: <ground truth>/surface.ply)");
+  app.add_option("--heldout_path",
+                 heldout_path,
+                 "Held-out viewpoints (default: <ground truth>/heldout)");
+  app.add_option(
+      "--gsd_m", gsd_m, "Ground sampling distance (default: from synth.json)");
+  app.add_option("--completeness_threshold_m",
+                 threshold_m,
+                 "Distance within which the truth counts as reached; 0: "
+                 "--completeness_threshold_gsd GSDs");
+  app.add_option(
+      "--completeness_threshold_gsd", threshold_gsd, "The same in GSDs");
+  app.add_option("--num_samples",
+                 num_samples,
+                 "Samples of the true surface and of meshes");
+  app.add_option("--render_path",
+                 render_path,
+                 "Write the renders of the texture evaluation here");
   app.add_option("--output_path", output_path, "Write the report as JSON here");
   app.add_option(
       "--align", align, "1: fit a similarity first; 0: both share a datum");
-  app.add_option("--label", label, "Name of the model in the table");
+  app.add_option("--label", label, "Name of the model in the tables");
+  app.add_option("--num_threads", num_threads, "Threads (-1: all cores)");
   if (!command.Parse(argc, argv)) return 0;
 
-  const Scene model = ReadModel(input_path);
-  const Scene truth = ReadModel(ground_truth_path);
-  SparseEvaluationOptions options;
-  options.align = align;
-  const SparseEvaluation evaluation = EvaluateSparse(model, truth, options);
-  PrintSparseTable(label.empty() ? input_path : label, evaluation);
-  if (!output_path.empty()) {
-    nlohmann::ordered_json report;
+  if (input_path.empty() && cloud_path.empty() && mesh_path.empty() &&
+      textured_mesh_path.empty()) {
+    ThrowInputError(
+        "nothing to evaluate: give --input_path, --cloud_path, "
+        "--mesh_path or --textured_mesh_path");
+  }
+  const TruthPaths found = FindTruth(ground_truth_path);
+  if (surface_path.empty()) surface_path = found.surface;
+  if (heldout_path.empty()) heldout_path = found.heldout;
+  Eigen::AlignedBox3d region;
+  double synth_gsd_m = 0;
+  if (!found.synth_json.empty()) {
+    ReadSynthDescription(found.synth_json, &region, &synth_gsd_m);
+  }
+  if (gsd_m <= 0) gsd_m = synth_gsd_m;
+  const Scene truth = ReadModel(found.model);
+  const std::string name = label.empty() ? input_path : label;
+
+  Json report;
+  report["ground_truth_path"] = ground_truth_path;
+  Sim3d truth_from_model;  // identity unless a sparse model is aligned
+  std::optional<Scene> model;
+  if (!input_path.empty()) {
     report["input_path"] = input_path;
-    report["ground_truth_path"] = ground_truth_path;
+    model = ReadModel(input_path);
+    SparseEvaluationOptions options;
+    options.align = align;
+    const SparseEvaluation evaluation = EvaluateSparse(*model, truth, options);
+    truth_from_model = evaluation.truth_from_model;
+    PrintSparseTable(name, evaluation);
     report["sparse"] = SparseToJson(evaluation);
+
+    if (calibration_path.empty() &&
+        fs::exists(fs::path(input_path) / "calibration.json")) {
+      calibration_path = (fs::path(input_path) / "calibration.json").string();
+    }
+    if (!calibration_path.empty() && !found.calibration.empty()) {
+      report["calibration"] = Json::array();
+      for (const CalibrationEvaluation& e :
+           EvaluateCalibrations(ReadCalibrationJson(calibration_path),
+                                ReadCalibrationJson(found.calibration))) {
+        std::printf("\n%s", CalibrationTable(e).c_str());
+        report["calibration"].push_back(CalibrationToJson(e));
+      }
+    }
+  }
+
+  const bool surfaces = !cloud_path.empty() || !mesh_path.empty() ||
+                        (!input_path.empty() && !surface_path.empty());
+  if (surfaces) {
+    if (surface_path.empty()) {
+      ThrowInputError(ground_truth_path,
+                      ": no surface.ply to judge clouds and meshes against "
+                      "(give --surface_path)");
+    }
+    const TriangleMesh surface = ReadMeshPly(surface_path);
+    const MeshDistance truth_distance(surface);
+    SurfaceEvaluationOptions options;
+    options.gsd_m = gsd_m;
+    options.region = region;
+    options.num_mesh_samples = num_samples;
+    options.num_threads = num_threads;
+    options.completeness_threshold_m =
+        threshold_m > 0 ? threshold_m : threshold_gsd * gsd_m;
+
+    if (model) {
+      // The tie points against the true surface, in the truth's datum.
+      std::vector<double> distances;
+      for (const auto& [id, point] : model->points3D) {
+        const Eigen::Vector3d p = truth_from_model * point.xyz;
+        if (region.isEmpty() || region.contains(p)) {
+          distances.push_back(truth_distance.Closest(p).distance);
+        }
+      }
+      if (!distances.empty()) {
+        const DistanceStatistics s =
+            ComputeDistanceStatistics(std::move(distances));
+        std::printf(
+            "\n3D points to the true surface: %zu points, mean %.5f, "
+            "RMS %.5f, median %.5f, p95 %.5f, max %.5f\n",
+            s.count,
+            s.mean,
+            s.rms,
+            s.median,
+            s.p95,
+            s.max);
+        report["points3D_to_surface_m"] = Statistics(s);
+      }
+    }
+
+    if (!cloud_path.empty() || !mesh_path.empty()) {
+      if (!(options.completeness_threshold_m > 0)) {
+        ThrowInputError(
+            "no ground sampling distance known: give "
+            "--completeness_threshold_m or --gsd_m");
+      }
+      VisibleSurfaceOptions visible_options;
+      visible_options.num_samples = num_samples;
+      visible_options.region = region;
+      visible_options.num_threads = num_threads;
+      const VisibleSurface visible =
+          FindVisibleSurface(surface, truth, visible_options);
+      std::printf(
+          "\ntrue surface: %.3f m2, %zu of %zu samples visible in 2 "
+          "or more images\n%s\n",
+          visible.area,
+          visible.samples.size(),
+          visible.num_candidates,
+          SurfaceTableHeader().c_str());
+      if (!cloud_path.empty()) {
+        PointCloud cloud = ReadPointCloudPly(cloud_path);
+        Transform(truth_from_model, &cloud);
+        const SurfaceEvaluation e =
+            EvaluateCloud(cloud, truth_distance, visible, options);
+        std::printf("%s\n",
+                    SurfaceTableRow(
+                        "cloud " + fs::path(cloud_path).filename().string(), e)
+                        .c_str());
+        report["cloud"] = SurfaceToJson(e);
+        report["cloud"]["path"] = cloud_path;
+      }
+      if (!mesh_path.empty()) {
+        TriangleMesh mesh = ReadMeshPly(mesh_path);
+        Transform(truth_from_model, &mesh.vertices);
+        const SurfaceEvaluation e =
+            EvaluateMesh(mesh, surface, truth_distance, visible, options);
+        std::printf("%s\n",
+                    SurfaceTableRow(
+                        "mesh " + fs::path(mesh_path).filename().string(), e)
+                        .c_str());
+        PrintTopology("mesh", e.topology);
+        PrintTopology("truth", e.truth_topology);
+        report["mesh"] = SurfaceToJson(e);
+        report["mesh"]["path"] = mesh_path;
+      }
+    }
+  }
+
+  if (!textured_mesh_path.empty()) {
+    if (heldout_path.empty() || surface_path.empty()) {
+      ThrowInputError(ground_truth_path,
+                      ": the texture evaluation needs held-out viewpoints and "
+                      "a textured true surface (give --heldout_path and "
+                      "--surface_path)");
+    }
+    TriangleMesh model = ReadMeshPly(textured_mesh_path);
+    Transform(truth_from_model, &model.vertices);
+    if (texture_path.empty()) texture_path = PlyTextureFile(textured_mesh_path);
+    cv::Mat model_texture;
+    if (model.HasTexcoords()) {
+      if (texture_path.empty()) {
+        ThrowInputError(textured_mesh_path,
+                        ": has texture coordinates but names no TextureFile "
+                        "(give --texture_path)");
+      }
+      model_texture = ReadImage(texture_path, ImageReadMode::kColor);
+    } else if (!model.vertices.HasColors()) {
+      ThrowInputError(textured_mesh_path,
+                      ": has neither texture coordinates nor vertex colours");
+    }
+    const TriangleMesh surface = ReadMeshPly(surface_path);
+    const std::string truth_texture_path = PlyTextureFile(surface_path);
+    const cv::Mat truth_texture =
+        truth_texture_path.empty()
+            ? cv::Mat()
+            : ReadImage(truth_texture_path, ImageReadMode::kColor);
+    TextureEvaluationOptions options;
+    options.num_threads = num_threads;
+    options.render_dir = render_path;
+    const TextureEvaluation e = EvaluateTexturedModel(model,
+                                                      model_texture,
+                                                      surface,
+                                                      truth_texture,
+                                                      ReadModel(heldout_path),
+                                                      options);
+    std::printf("\ntextured model from held-out viewpoints:\n%s",
+                TextureTable(e).c_str());
+    Json texture = {{"path", textured_mesh_path},
+                    {"mean_psnr_db", e.mean_psnr_db},
+                    {"mean_ssim", e.mean_ssim},
+                    {"mean_normalized_psnr_db", e.mean_normalized_psnr_db},
+                    {"mean_normalized_ssim", e.mean_normalized_ssim}};
+    texture["views"] = Json::array();
+    for (const ViewComparison& v : e.views) {
+      texture["views"].push_back({{"name", v.name},
+                                  {"pixels", v.raw.num_pixels},
+                                  {"psnr_db", v.raw.psnr_db},
+                                  {"ssim", v.raw.ssim},
+                                  {"normalized_psnr_db", v.normalized.psnr_db},
+                                  {"normalized_ssim", v.normalized.ssim}});
+    }
+    report["texture"] = texture;
+  }
+
+  if (!output_path.empty()) {
     WriteFileAtomically(output_path, report.dump(2) + "\n");
   }
   return 0;

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <sstream>
 
@@ -472,6 +474,27 @@ TriangleMesh ReadMeshPly(const std::string& path) {
   TriangleMesh mesh = ReadPly(path);
   if (mesh.faces.empty()) ThrowInputError(path, ": PLY file has no faces");
   return mesh;
+}
+
+std::string PlyTextureFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) ThrowInputError(path, ": cannot open the PLY file");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line == "end_header") break;
+    std::istringstream words(line);
+    std::string keyword, tag, name;
+    words >> keyword >> tag;
+    if (keyword != "comment" || tag != "TextureFile") continue;
+    std::getline(words >> std::ws, name);
+    if (name.empty()) continue;
+    const std::filesystem::path texture(name);
+    return texture.is_absolute()
+               ? name
+               : (std::filesystem::path(path).parent_path() / texture).string();
+  }
+  return "";
 }
 
 namespace {

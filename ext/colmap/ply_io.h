@@ -31,6 +31,10 @@ TriangleMesh ReadPly(const std::string& path);
 PointCloud ReadPointCloudPly(const std::string& path);
 // Reads a mesh; throws InputError if the file has no faces.
 TriangleMesh ReadMeshPly(const std::string& path);
+// The texture atlas a mesh's `texcoord`s refer to: the header line
+// `comment TextureFile NAME` (MeshLab's convention), resolved against the
+// file's folder; empty when the header names none.
+std::string PlyTextureFile(const std::string& path);
 
 // Writes atomically (temporary name, rename).
 void WritePointCloudPly(const PointCloud& cloud,
