@@ -323,6 +323,19 @@ LsmMatch MatchLsm(const LsmTemplate& patch,
   std::array<bool, kNumLsmParams> held{};
   bool converged = false;
   const double r = patch.radius;
+  // The step control's memory: where the last step started, its residuals
+  // there, and the step.
+  LsmParameters step_start;
+  double step_start_residual_sq = std::numeric_limits<double>::infinity();
+  LsmVector last_delta = LsmVector::Zero();
+  const auto small_step = [r, &options](const LsmVector& delta) {
+    const double shift_change = std::hypot(delta[kLsmA0], delta[kLsmB0]);
+    const double corner_change =
+        r * (std::abs(delta[kLsmA1]) + std::abs(delta[kLsmA2]) +
+             std::abs(delta[kLsmB1]) + std::abs(delta[kLsmB2]));
+    return shift_change < options.convergence_px &&
+           corner_change < options.convergence_px;
+  };
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     match.iterations = iteration;
     if (!BuildLsmNormalEquations(
@@ -332,6 +345,20 @@ LsmMatch MatchLsm(const LsmTemplate& patch,
       match.xy = params.Position();
       return match;
     }
+    if (options.step_control &&
+        equations.residual_sq > step_start_residual_sq) {
+      // The last step went too far: half of it from where it started.
+      last_delta *= 0.5;
+      params = step_start;
+      params.Add(last_delta);
+      if (small_step(last_delta)) {
+        converged = true;
+        break;
+      }
+      continue;
+    }
+    step_start = params;
+    step_start_residual_sq = equations.residual_sq;
     held = SelectLsmParameters(equations.N, enabled, options);
     const std::vector<int> free = FreeIndices(held);
     if (free.empty()) {
@@ -357,6 +384,7 @@ LsmMatch MatchLsm(const LsmTemplate& patch,
       match.status = LsmStatus::kSingular;
       return match;
     }
+    last_delta = delta;
     params.Add(delta);
     if ((params.Position() - approximation.Position()).norm() >
             options.max_shift_px ||
@@ -367,12 +395,7 @@ LsmMatch MatchLsm(const LsmTemplate& patch,
       match.xy = params.Position();
       return match;
     }
-    const double shift_change = std::hypot(delta[kLsmA0], delta[kLsmB0]);
-    const double corner_change =
-        r * (std::abs(delta[kLsmA1]) + std::abs(delta[kLsmA2]) +
-             std::abs(delta[kLsmB1]) + std::abs(delta[kLsmB2]));
-    if (shift_change < options.convergence_px &&
-        corner_change < options.convergence_px) {
+    if (small_step(delta)) {
       converged = true;
       break;
     }

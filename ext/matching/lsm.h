@@ -161,6 +161,14 @@ struct LsmOptions {
   // Estimate r0, r1; off: the grey values are compared as they are.
   bool estimate_radiometry = true;
   int max_iterations = 25;
+  // Step control: where an iteration ends with a larger sum of squared
+  // residuals than it started from, go back and take half the step instead
+  // (each halving counts as an iteration). Gauss-Newton ignores the second
+  // derivatives of the residuals; where the residuals are large (relief,
+  // occlusion, non-affine distortion in real images) the full step can
+  // overshoot by about 2x and the iteration then oscillates between two
+  // states around the solution without converging. Off: plain Gauss-Newton.
+  bool step_control = false;
   // Scale sigma0 for the noise the resampling removed (header comment).
   bool correct_resampling_noise = true;
   // Converged when the shift changes by less than this, and the shape moves

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 namespace bayon {
 namespace {
@@ -371,6 +373,71 @@ TEST(Lsm, OneTemplateAgainstSeveralSearchPatches) {
     EXPECT_NEAR(matches[i].params.r1, truths[i].r1, 0.06) << i;
   }
   EXPECT_EQ(matches[3].status, LsmStatus::kOutsideImage);
+}
+
+// Random blocks 2 pixels wide, each pixel the average of the scene over
+// the pixel's area (8 x 8 sub-samples) with the scene moved by `shift`:
+// what a camera records of sharp edges, g(x) = f(x + shift).
+cv::Mat RenderBlocks(int size, const Eigen::Vector2d& shift) {
+  constexpr int kBlock = 2, kSubsamples = 8;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> grey(40, 200);
+  const int num_blocks = size / kBlock + 4;
+  std::vector<double> blocks(num_blocks * num_blocks);
+  for (double& value : blocks) value = grey(rng);
+  cv::Mat image(size, size, CV_32F);
+  for (int row = 0; row < size; ++row) {
+    for (int col = 0; col < size; ++col) {
+      double sum = 0;
+      for (int a = 0; a < kSubsamples; ++a) {
+        for (int b = 0; b < kSubsamples; ++b) {
+          const double x = col + (a + 0.5) / kSubsamples + shift.x();
+          const double y = row + (b + 0.5) / kSubsamples + shift.y();
+          const int i = static_cast<int>(std::floor(x / kBlock)) + 2;
+          const int j = static_cast<int>(std::floor(y / kBlock)) + 2;
+          sum += blocks[j * num_blocks + i];
+        }
+      }
+      image.at<float>(row, col) = sum / (kSubsamples * kSubsamples);
+    }
+  }
+  return image;
+}
+
+TEST(Lsm, StepControlConvergesWherePlainGaussNewtonOscillates) {
+  // Edges a pixel wide: the smooth gradients are about half the slope of
+  // the interpolated surface, the full Gauss-Newton step overshoots by
+  // about 2x and the iteration oscillates around the solution.
+  const Eigen::Vector2d shift(0.37, 0.21);
+  const cv::Mat f = RenderBlocks(120, Eigen::Vector2d::Zero());
+  const cv::Mat g = RenderBlocks(120, shift);
+  int num_converged[2] = {0, 0};
+  double sum_sq = 0;
+  int num_points = 0;
+  for (int step_control = 0; step_control < 2; ++step_control) {
+    LsmOptions options;
+    options.step_control = step_control == 1;
+    for (int y = 20; y < 100; y += 6) {
+      for (int x = 20; x < 100; x += 6) {
+        const Eigen::Vector2d p(x + 0.5, y + 0.5);
+        const LsmMatch match =
+            MatchLsm(f,
+                     p,
+                     g,
+                     LsmParameters::At(p + Eigen::Vector2d(0.4, -0.5)),
+                     options);
+        num_points += step_control;
+        if (!match.ok()) continue;
+        ++num_converged[step_control];
+        if (step_control) sum_sq += (match.xy - (p - shift)).squaredNorm();
+      }
+    }
+  }
+  // 14 x 14 = 196 points.
+  ASSERT_EQ(num_points, 196);
+  EXPECT_LT(num_converged[0], num_points / 2);
+  EXPECT_GE(num_converged[1], num_points * 95 / 100);
+  EXPECT_LT(std::sqrt(sum_sq / num_converged[1]), 0.1);
 }
 
 TEST(Lsm, OptionsAreChecked) {

@@ -1,0 +1,193 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/matching/keypoint_refinement.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+
+namespace bayon {
+
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json SummaryToJson(const KeypointRefinementSummary& summary,
+                   const std::string& database_path,
+                   const std::string& output_path) {
+  Json json;
+  json["database_path"] = database_path;
+  json["output_path"] = output_path;
+  json["match_source"] = summary.match_source;
+  json["num_pairs"] = summary.num_pairs;
+  json["num_tracks"] = summary.num_tracks;
+  json["num_observations"] = summary.num_observations;
+  json["num_reference"] = summary.num_reference;
+  json["num_refined"] = summary.num_refined;
+  json["num_rejected"] = summary.num_rejected;
+  json["median_shift_px"] = summary.median_shift_px;
+  json["mean_shift_px"] = summary.mean_shift_px;
+  Json outcomes = Json::object();
+  for (int i = 0; i < kNumObservationOutcomes; ++i) {
+    outcomes[ObservationOutcomeName(static_cast<ObservationOutcome>(i))] =
+        summary.num_by_outcome[i];
+  }
+  json["outcomes"] = outcomes;
+  json["images"] = Json::array();
+  for (const ImageRefinementReport& image : summary.images) {
+    json["images"].push_back({{"image_id", image.image_id},
+                              {"name", image.name},
+                              {"num_keypoints", image.num_keypoints},
+                              {"num_observations", image.num_observations},
+                              {"num_reference", image.num_reference},
+                              {"num_refined", image.num_refined},
+                              {"num_rejected", image.num_rejected},
+                              {"median_shift_px", image.median_shift_px}});
+  }
+  json["seconds"] = {{"read", summary.read_seconds},
+                     {"refine", summary.refine_seconds},
+                     {"write", summary.write_seconds},
+                     {"total", summary.seconds}};
+  return json;
+}
+
+void PrintImageTable(const KeypointRefinementSummary& summary) {
+  std::printf("%-28s %9s %9s %9s %9s %9s %12s\n",
+              "image",
+              "keypoints",
+              "in tracks",
+              "reference",
+              "refined",
+              "rejected",
+              "median shift");
+  for (const ImageRefinementReport& image : summary.images) {
+    std::printf("%-28s %9d %9d %9d %9d %9d %9.3f px\n",
+                image.name.c_str(),
+                image.num_keypoints,
+                image.num_observations,
+                image.num_reference,
+                image.num_refined,
+                image.num_rejected,
+                image.median_shift_px);
+  }
+  std::string rejections;
+  for (int i = 0; i < kNumObservationOutcomes; ++i) {
+    const auto outcome = static_cast<ObservationOutcome>(i);
+    if (!IsRejection(outcome) || summary.num_by_outcome[i] == 0) continue;
+    rejections += StrCat(rejections.empty() ? "" : ", ",
+                         ObservationOutcomeName(outcome),
+                         " ",
+                         summary.num_by_outcome[i]);
+  }
+  std::printf("rejected: %s\n",
+              rejections.empty() ? "none" : rejections.c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int RunRefineKeypoints(int argc, char** argv) {
+  std::string database_path, image_path, output_path, report_path, log_path;
+  bool overwrite = false;
+  KeypointRefinementOptions options;
+  LsmOptions& lsm = options.lsm;
+  std::string interpolation = InterpolationName(lsm.interpolation);
+  CommandLine command(
+      "refine_keypoints",
+      "Least-squares refinement of the matched keypoints of a COLMAP "
+      "database (e.g. SIFT from colmap feature_extractor + a matcher): "
+      "tracks from the verified matches, the best-textured observation of "
+      "each as reference, every other one matched to it by adaptive "
+      "least-squares matching (affine + 2 radiometric parameters, started "
+      "from the keypoints' affine frames), blunders rejected (convergence, "
+      "sigma0, shape bounds, back-matching). Writes a new database with the "
+      "refined keypoint positions and everything else unchanged; the input "
+      "is never modified.");
+  CLI::App& app = command.app();
+  app.add_option("--database_path", database_path, "Input COLMAP database")
+      ->required();
+  app.add_option("--image_path", image_path, "Folder of the images")
+      ->required();
+  app.add_option("--output_path", output_path, "The refined database to write")
+      ->required();
+  app.add_option("--overwrite", overwrite, "1: replace an existing output");
+  app.add_option(
+      "--patch_radius", lsm.patch_radius, "Half side of the patches, pixels");
+  app.add_option("--interpolation", interpolation, "bilinear or bicubic")
+      ->transform(CLI::IsMember({"bilinear", "bicubic"}));
+  app.add_option("--estimate_shape",
+                 lsm.estimate_shape,
+                 "1: affine patch shape; 0: shifts only");
+  app.add_option("--use_keypoint_shape",
+                 options.use_keypoint_shape,
+                 "1: start from the keypoints' affine frames");
+  app.add_option("--max_iterations", lsm.max_iterations, "LSM iterations");
+  app.add_option(
+      "--max_sigma0", options.max_sigma0, "Largest sigma0, grey values");
+  app.add_option("--min_correlation",
+                 options.min_correlation,
+                 "Smallest correlation of the matched patches");
+  app.add_option("--max_sigma_px",
+                 options.max_sigma_px,
+                 "Largest standard deviation of a shift, pixels");
+  app.add_option("--max_shift_px",
+                 options.max_shift_px,
+                 "Largest move from the keypoint, pixels");
+  app.add_option("--back_matching",
+                 options.back_matching,
+                 "1: match back into the reference image");
+  app.add_option("--max_backmatch_px",
+                 options.max_backmatch_px,
+                 "Largest back-matching miss, pixels");
+  app.add_option("--max_track_length",
+                 options.max_track_length,
+                 "Longer tracks are left alone");
+  app.add_option(
+      "--num_threads", options.num_threads, "Threads (-1 = all cores)");
+  app.add_option("--report_path", report_path, "Write the summary as JSON");
+  app.add_option(
+      "--log_path",
+      log_path,
+      "Log file (default <output folder>/logs/refine_keypoints.log)");
+  if (!command.Parse(argc, argv)) return 0;
+  lsm.interpolation = ParseInterpolation(interpolation);
+  options.Check();
+  CheckFileExists(database_path, "--database_path");
+  CheckDirectoryExists(image_path, "--image_path");
+  CheckOutputPath(output_path, overwrite);
+  // Not a COLMAP database: one line, before a log appears beside the output.
+  Database(database_path, Database::Mode::kReadOnly);
+  command.StartLog(DatabaseLogPath(log_path, output_path, "refine_keypoints"));
+
+  const KeypointRefinementSummary summary = RefineDatabaseKeypoints(
+      database_path, image_path, output_path, overwrite, options);
+  if (!report_path.empty()) {
+    WriteFileAtomically(
+        report_path,
+        SummaryToJson(summary, database_path, output_path).dump(2) + "\n");
+  }
+  PrintImageTable(summary);
+  command.PrintSummary(StrCat(summary.num_refined,
+                              " of ",
+                              summary.num_observations - summary.num_reference,
+                              " observations refined (",
+                              summary.num_rejected,
+                              " rejected, ",
+                              summary.num_tracks,
+                              " tracks from ",
+                              summary.num_pairs,
+                              " pairs of ",
+                              summary.match_source,
+                              "), median shift ",
+                              summary.median_shift_px,
+                              " px, ",
+                              summary.seconds,
+                              " s -> ",
+                              output_path));
+  return summary.num_refined > 0 ? 0 : 1;
+}
+
+}  // namespace bayon
