@@ -10,6 +10,8 @@ int RunAdjust(int argc, char** argv);
 int RunStripCommand(int argc, char** argv);
 int RunImport(int argc, char** argv);
 int RunImportBal(int argc, char** argv);
+int RunImportGroundTruth(int argc, char** argv);
+int RunInterior(int argc, char** argv);
 int RunModelConverter(int argc, char** argv);
 int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);
@@ -19,5 +21,7 @@ int RunMesh(int argc, char** argv);
 int RunSynthCloud(int argc, char** argv);
 int RunMatch(int argc, char** argv);
 int RunRelative(int argc, char** argv);
+int RunDisparity(int argc, char** argv);
+int RunRefineKeypoints(int argc, char** argv);
 
 }  // namespace bayon

@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -29,10 +30,16 @@ constexpr Command kCommands[] = {
     {"import_bal",
      bayon::RunImportBal,
      "a Bundle Adjustment in the Large problem as a workspace"},
+    {"import_ground_truth",
+     bayon::RunImportGroundTruth,
+     "benchmark cameras (Middlebury, Strecha) as a COLMAP model"},
     {"synth", bayon::RunSynth, "make a synthetic workspace with known truth"},
     {"synth_cloud",
      bayon::RunSynthCloud,
      "make a synthetic dense cloud with known surface and blunders"},
+    {"interior",
+     bayon::RunInterior,
+     "image frames: pixel pitch, or virtual fiducials of film scans"},
     {"features",
      bayon::RunFeatures,
      "Moravec interest points for every image of a database"},
@@ -42,6 +49,12 @@ constexpr Command kCommands[] = {
     {"relative",
      bayon::RunRelative,
      "relative orientation of matched pairs (DRT, LMedS, coplanarity)"},
+    {"disparity",
+     bayon::RunDisparity,
+     "disparity surfaces: where to search along the epipolar lines"},
+    {"refine_keypoints",
+     bayon::RunRefineKeypoints,
+     "least-squares refinement of a COLMAP database's matched keypoints"},
     {"edit",
      bayon::RunEdit,
      "remove blunders from a dense cloud (local surface fitting)"},
@@ -66,7 +79,8 @@ void PrintUsage() {
                "its options)\n\nCommands:\n";
   for (const Command& command : kCommands) {
     std::cout << "  " << command.name
-              << std::string(18 - std::strlen(command.name), ' ')
+              << std::string(
+                     22 - std::min<size_t>(20, std::strlen(command.name)), ' ')
               << command.description << "\n";
   }
 }

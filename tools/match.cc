@@ -42,6 +42,9 @@ int RunMatch(int argc, char** argv) {
   app.add_option("--search_window_fraction",
                  correlation.search_window_fraction,
                  "Search window area as a fraction of the image");
+  app.add_option("--max_keypoint_shift_px",
+                 correlation.max_keypoint_shift_px,
+                 "Image-2 windows also shifted this far from the keypoint");
   app.add_option("--max_candidates_per_point",
                  correlation.max_candidates_per_point,
                  "Candidates kept per point");

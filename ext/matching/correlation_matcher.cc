@@ -26,6 +26,14 @@ void CorrelationMatchingOptions::Check() const {
               "CorrelationMatchingOptions.max_candidates_per_point",
               ">= 1",
               max_candidates_per_point);
+  CheckOption(max_keypoint_shift_px >= 0 && max_keypoint_shift_px <= 3,
+              "CorrelationMatchingOptions.max_keypoint_shift_px",
+              "in [0, 3]",
+              max_keypoint_shift_px);
+  CheckOption(shift_min_ncc > -1 && shift_min_ncc < 1,
+              "CorrelationMatchingOptions.shift_min_ncc",
+              "in (-1, 1)",
+              shift_min_ncc);
   CheckOption(refine_min_ncc > -1 && refine_min_ncc < 1,
               "CorrelationMatchingOptions.refine_min_ncc",
               "in (-1, 1)",
@@ -364,6 +372,23 @@ std::vector<MatchCandidate> FindCandidatesAround(
   const int window = image1.options.window_size;
   const int dim = image1.options.FineDim();
   std::vector<float> rotated(dim);
+  // Image-2 windows shifted around their keypoints (step 2 of the header),
+  // cut from the raw windows when a candidate first needs them.
+  const int shift = std::min(options.max_keypoint_shift_px,
+                             (image2.options.RawSide() - window) / 2);
+  const int num_shifts = (2 * shift + 1) * (2 * shift + 1);
+  std::vector<float> shifted;
+  std::vector<uint8_t> has_shifted;
+  if (shift > 0) has_shifted.assign(image2.size(), 0);
+  const auto shifted_windows = [&](int j) -> const float* {
+    if (shifted.empty()) shifted.resize(image2.size() * num_shifts * dim);
+    float* windows = shifted.data() + static_cast<size_t>(j) * num_shifts * dim;
+    if (!has_shifted[j]) {
+      ShiftedWindows(image2, j, shift, windows);
+      has_shifted[j] = 1;
+    }
+    return windows;
+  };
   std::vector<MatchCandidate> candidates, local;
   for (int i = 0; i < image1.size(); ++i) {
     if (!image1.valid[i]) continue;
@@ -382,7 +407,13 @@ std::vector<MatchCandidate> FindCandidatesAround(
         for (int j : grid[cy * grid_w + cx]) {
           const Eigen::Vector2d d = image2.xy[j] - center;
           if (std::abs(d.x()) > half_w || std::abs(d.y()) > half_h) continue;
-          const float ncc = Dot(rotated.data(), image2.Fine(j), dim);
+          float ncc = Dot(rotated.data(), image2.Fine(j), dim);
+          if (shift > 0 && ncc >= options.shift_min_ncc) {
+            const float* windows = shifted_windows(j);
+            for (int k = 0; k < num_shifts; ++k) {
+              ncc = std::max(ncc, Dot(rotated.data(), windows + k * dim, dim));
+            }
+          }
           if (ncc >= options.min_ncc) local.push_back({i, j, ncc});
         }
       }
@@ -510,8 +541,11 @@ PairMatches MatchImagePatches(const ImagePatches& image1,
                      mapping.affine.leftCols<2>(),
                      std::max(image1.width, image1.height),
                      options.relaxation);
+    // A later hypothesis needs clearly more (5 %) conjugate points: where
+    // both find the same ones, a few chance matches must not decide.
     if (&mapping == &hypotheses[0] ||
-        attempt.matches.size() > relaxed.matches.size()) {
+        attempt.matches.size() >
+            relaxed.matches.size() + relaxed.matches.size() / 20) {
       relaxed = std::move(attempt);
       result.mapping = mapping;
       result.num_candidates = static_cast<int>(candidates.size());

@@ -129,6 +129,61 @@ TEST(CorrelationMatcher, UnrelatedImagesGiveNoGlobalMappingAndFewMatches) {
   }
 }
 
+// Keypoints of image 2 one pixel off their features (as Moravec points of
+// two photographs are), on a fine texture: the keypoint windows alone
+// correlate poorly, the shifted ones find the pairs, and the refinement the
+// exact position.
+TEST(CorrelationMatcher, CandidatesTolerateKeypointsOffByAPixel) {
+  cv::Mat image1(270, 360, CV_32F);
+  cv::RNG rng(12);
+  rng.fill(image1, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(image1, image1, cv::Size(0, 0), 1.0);
+  // Image 2: image 1 shifted by whole pixels, so the truth is exact.
+  const Eigen::Vector2d shift(7, -4);
+  cv::Mat image2;
+  const cv::Mat warp =
+      (cv::Mat_<double>(2, 3) << 1, 0, shift.x(), 0, 1, shift.y());
+  cv::warpAffine(image1,
+                 image2,
+                 warp,
+                 image1.size(),
+                 cv::INTER_NEAREST,
+                 cv::BORDER_REFLECT);
+  const ImagePatches patches1 = Patches(image1);
+  std::vector<Eigen::Vector2d> xy2;
+  for (int i = 0; i < patches1.size(); ++i) {
+    const Eigen::Vector2d off(i % 2 == 0 ? 1.0 : -1.0, i % 3 == 0 ? 1.0 : 0.0);
+    xy2.push_back(patches1.xy[i] + shift + off);
+  }
+  const ImagePatches patches2 =
+      ExtractImagePatches(image2, xy2, PatchOptions());
+  const auto true_candidates = [&](int max_shift) {
+    CorrelationMatchingOptions options;
+    options.max_keypoint_shift_px = max_shift;
+    GlobalMapping mapping;
+    mapping.affine.col(2) = shift;
+    int count = 0;
+    for (const MatchCandidate& c :
+         FindCandidates(patches1, patches2, mapping, options)) {
+      count += c.idx1 == c.idx2;
+    }
+    return count;
+  };
+  const int valid = patches1.NumValid();
+  const int without = true_candidates(0), with = true_candidates(1);
+  EXPECT_LT(without, valid / 2);
+  EXPECT_GT(with, 0.8 * valid) << without << " without the shifts";
+  const PairMatches result =
+      MatchImagePatches(patches1, patches2, CorrelationMatchingOptions());
+  int good = 0;
+  for (int k = 0; k < result.matches.rows(); ++k) {
+    const Eigen::Vector2d truth = result.reference_xy1[k] + shift;
+    good += result.matches(k, 0) == result.matches(k, 1) &&
+            (result.refined_xy2[k] - truth).norm() < 0.1;
+  }
+  EXPECT_GT(good, 0.8 * valid) << "of " << result.matches.rows();
+}
+
 TEST(CorrelationMatcher, RefinementFindsTheSubPixelShift) {
   const Pair pair = MakePair(1.0, {3.3, -2.6}, 0);
   const ImagePatches patches1 = Patches(pair.image1);

@@ -3,6 +3,7 @@
 
 #include "ext/core/errors.h"
 
+#include <glog/logging.h>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -92,6 +93,29 @@ bool NormalizeWindow(float* values, int n, double min_std) {
     values[i] = static_cast<float>((values[i] - mean) * scale);
   }
   return true;
+}
+
+void ShiftedWindows(const ImagePatches& patches,
+                    int idx,
+                    int shift,
+                    float* out) {
+  const PatchOptions& options = patches.options;
+  const int w = options.window_size, half = w / 2, dim = w * w;
+  const int raw_side = options.RawSide(), center = raw_side / 2;
+  CHECK_LE(2 * shift + w, raw_side) << "shift " << shift << " too large";
+  const float* raw = patches.Raw(idx);
+  for (int dv = -shift; dv <= shift; ++dv) {
+    for (int du = -shift; du <= shift; ++du) {
+      for (int v = -half; v <= half; ++v) {
+        const float* row = raw + (center + dv + v) * raw_side + center + du;
+        for (int u = -half; u <= half; ++u) {
+          out[(v + half) * w + (u + half)] = row[u];
+        }
+      }
+      NormalizeWindow(out, dim, options.min_std);
+      out += dim;
+    }
+  }
 }
 
 ImagePatches ExtractImagePatches(const cv::Mat& gray,

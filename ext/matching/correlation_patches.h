@@ -111,4 +111,14 @@ void RotateWindow(const float* in, int side, int quarter_turns, float* out);
 // the standard deviation is below `min_std`.
 bool NormalizeWindow(float* values, int n, double min_std);
 
+// The fine (w x w) windows of keypoint `idx` with their centres shifted by
+// (du, dv), |du|, |dv| <= shift, cut from its raw window and normalised like
+// the fine one (flat ones all zero): (2 shift + 1)^2 windows of FineDim()
+// values into `out`, dv outer, du inner, from (-shift, -shift).
+// Requires 2 shift + window_size <= RawSide().
+void ShiftedWindows(const ImagePatches& patches,
+                    int idx,
+                    int shift,
+                    float* out);
+
 }  // namespace bayon

@@ -63,6 +63,30 @@ TEST(CorrelationPatches, RotatedImageGivesRotatedWindows) {
   }
 }
 
+TEST(CorrelationPatches, ShiftedWindowsAreTheFineWindowsOfNearbyPixels) {
+  cv::Mat image(60, 80, CV_32F);
+  cv::RNG rng(5);
+  rng.fill(image, cv::RNG::UNIFORM, 0, 255);
+  PatchOptions options;
+  const int shift = 1, dim = options.FineDim();
+  // The keypoint and its eight neighbours, each with its own fine window.
+  std::vector<Eigen::Vector2d> xy;
+  for (int dv = -shift; dv <= shift; ++dv) {
+    for (int du = -shift; du <= shift; ++du) {
+      xy.emplace_back(30.5 + du, 25.5 + dv);
+    }
+  }
+  const ImagePatches patches = ExtractImagePatches(image, xy, options);
+  std::vector<float> shifted(9 * dim);
+  ShiftedWindows(patches, 4, shift, shifted.data());  // the middle one
+  for (int k = 0; k < 9; ++k) {
+    ASSERT_TRUE(patches.valid[k]);
+    for (int i = 0; i < dim; ++i) {
+      EXPECT_NEAR(shifted[k * dim + i], patches.Fine(k)[i], 1e-5) << k;
+    }
+  }
+}
+
 TEST(CorrelationPatches, FlatAndBorderWindowsAreInvalid) {
   cv::Mat image(40, 40, CV_32F, cv::Scalar(100));
   image(cv::Rect(20, 0, 20, 40)).setTo(150);

@@ -25,6 +25,12 @@ void MatchingOptions::Check() const {
   pairing.Check();
   patches.Check();
   correlation.Check();
+  const std::string shift_rule =
+      StrCat("< patches.refine_radius (", patches.refine_radius, ")");
+  CheckOption(correlation.max_keypoint_shift_px < patches.refine_radius,
+              "MatchingOptions.correlation.max_keypoint_shift_px",
+              shift_rule.c_str(),
+              correlation.max_keypoint_shift_px);
   CheckOption(min_num_matches >= 8,
               "MatchingOptions.min_num_matches",
               ">= 8 (the relative orientation needs 8 points)",

@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# Benchmark of bayon's automated relative orientation against stock COLMAP's
+# features and matching on ../shared/data/sceaux-castle (11 JPEG photos,
+# 2832 x 2128), in the same run, on the CPU:
+#   bayon:  import (one camera, EXIF focal length), features (Moravec),
+#           match --pairing exhaustive (correlation + relaxation),
+#           relative (DRT + LMedS + coplanarity adjustment)
+#   COLMAP: feature_extractor (SIFT, one camera) and exhaustive_matcher
+#           (matching and geometric verification)
+# Wall time and peak memory per stage (/usr/bin/time -v), the totals and
+# their ratio, and what each produced: keypoints, matched pairs, matches,
+# verified pairs (two-view geometries) and their inlier matches.
+#   scripts/bench.sh relative
+#   BAYON=build-rel/tools/bayon bash scripts/bench/relative.sh   (no rebuild)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+BAYON="${BAYON:-$root/build/tools/bayon}"
+BAYON_BUILD="${BAYON_BUILD:-$(dirname "$(dirname "$BAYON")")}"
+data="${BAYON_DATA_DIR:-$root/../shared/data}"
+images="$data/sceaux-castle/images"
+dir="$BAYON_BUILD/bench/relative"
+[ -x /usr/bin/time ] || { echo "relative.sh: /usr/bin/time missing (apt-get install time)" >&2; exit 2; }
+[ -d "$images" ] || { echo "relative.sh: $images not found" >&2; exit 2; }
+rm -rf "$dir"
+mkdir -p "$dir/bayon" "$dir/colmap"
+
+# run LABEL COMMAND...: times the command into $dir/LABEL.{log,time}.
+run() {
+  local label="$1"
+  shift
+  if ! /usr/bin/time -v -o "$dir/$label.time" "$@" >"$dir/$label.log" 2>&1; then
+    echo "$label failed, see $dir/$label.log" >&2
+    return 1
+  fi
+}
+wall() {
+  sed -n 's/.*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "$dir/$1.time" |
+    awk -F: '{ s = 0; for (i = 1; i <= NF; ++i) s = s * 60 + $i; print s }'
+}
+peak_mb() {
+  echo $(($(sed -n 's/.*Maximum resident set size (kbytes): //p' "$dir/$1.time") / 1024))
+}
+# What a database holds: keypoints, matched pairs, matches, verified pairs,
+# inlier matches.
+counts() {
+  python3 - "$1" <<'EOF'
+import sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+q = lambda sql: db.execute(sql).fetchone()[0] or 0
+print(q("SELECT sum(rows) FROM keypoints"),
+      q("SELECT count(*) FROM matches WHERE rows > 0"),
+      q("SELECT sum(rows) FROM matches"),
+      q("SELECT count(*) FROM two_view_geometries WHERE rows > 0"),
+      q("SELECT sum(rows) FROM two_view_geometries"))
+EOF
+}
+
+# --- bayon
+bdb="$dir/bayon/database.db"
+"$BAYON" import --image_path "$images" --database_path "$bdb" --single_camera 1 \
+  --log_path "$dir/bayon/import.log" >/dev/null
+run bayon_features "$BAYON" features --database_path "$bdb" --image_path "$images"
+run bayon_match "$BAYON" match --database_path "$bdb" --image_path "$images" \
+  --pairing exhaustive
+run bayon_relative "$BAYON" relative --database_path "$bdb"
+
+# --- COLMAP
+cdb="$dir/colmap/database.db"
+run colmap_features colmap feature_extractor --database_path "$cdb" \
+  --image_path "$images" --ImageReader.single_camera 1 --SiftExtraction.use_gpu 0
+run colmap_match colmap exhaustive_matcher --database_path "$cdb" \
+  --SiftMatching.use_gpu 0
+
+read -r b_kp b_pairs b_matches b_verified b_inliers < <(counts "$bdb")
+read -r c_kp c_pairs c_matches c_verified c_inliers < <(counts "$cdb")
+row() {
+  printf '%-34s %8.1f %8s\n' "$1" "$(wall "$2")" "$(peak_mb "$2")"
+}
+total() {
+  local t=0 m=0 label
+  for label in "$@"; do
+    t=$(awk -v a="$t" -v b="$(wall "$label")" 'BEGIN { print a + b }')
+    m=$(awk -v a="$m" -v b="$(peak_mb "$label")" 'BEGIN { print (b > a ? b : a) }')
+  done
+  echo "$t $m"
+}
+read -r b_total b_peak < <(total bayon_features bayon_match bayon_relative)
+read -r c_total c_peak < <(total colmap_features colmap_match)
+
+echo "sceaux-castle: 11 images 2832 x 2128, all pairs, CPU ($(nproc) cores)"
+printf '%-34s %8s %8s\n' "stage" "time s" "peak MB"
+row "bayon features (Moravec)" bayon_features
+row "bayon match (exhaustive)" bayon_match
+row "bayon relative (DRT, LMedS)" bayon_relative
+printf '%-34s %8.1f %8s\n' "bayon total" "$b_total" "$b_peak"
+row "colmap feature_extractor (SIFT)" colmap_features
+row "colmap exhaustive_matcher" colmap_match
+printf '%-34s %8.1f %8s\n' "colmap total" "$c_total" "$c_peak"
+awk -v a="$b_total" -v b="$c_total" 'BEGIN {
+  printf "time ratio bayon / colmap: %.2f (%s)\n", a / b,
+         a < b ? "bayon faster" : "colmap faster" }'
+printf '%-8s %10s %13s %10s %15s %14s\n' "" "keypoints" "matched pairs" "matches" \
+  "verified pairs" "inlier matches"
+printf '%-8s %10s %13s %10s %15s %14s\n' bayon "$b_kp" "$b_pairs" "$b_matches" \
+  "$b_verified" "$b_inliers"
+printf '%-8s %10s %13s %10s %15s %14s\n' colmap "$c_kp" "$c_pairs" "$c_matches" \
+  "$c_verified" "$c_inliers"
+echo "outputs and logs in $dir"

@@ -1,0 +1,563 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// What issue 4 asks the automated relative orientation to show, end to end:
+// bayon features, match and relative on the rendered tower judged against
+// its true poses (with the true interior orientation, and with distortion
+// assumed zero as the paper starts); stock `colmap mapper` on databases
+// filled only by bayon (tower and temple ring), evaluated against the truth
+// beside stock COLMAP's own SIFT pipeline; and bad pairs in one run.
+#include "ext/colmap/colmap_cli.h"
+#include "ext/colmap/database.h"
+#include "ext/colmap/model_io.h"
+#include "ext/colmap/table_matches.h"
+#include "ext/colmap/table_relative.h"
+#include "ext/core/file_util.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+
+#include "tests/testing.h"
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+void RunOk(const std::vector<std::string>& args) {
+  const testing::CommandResult result = testing::RunBayon(args);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+}
+
+// The tower of `bayon synth` (16 stations, seed 1) at 1200 x 800 with the
+// true calibration in its database, Moravec points on 8-pixel patches,
+// ring matches (two neighbours) and both relative orientations: with the
+// true interior orientation (database.db) and with distortion assumed zero
+// (zero_distortion.db).
+std::string TowerFixture() {
+  return testing::SharedFixture(
+      "relative_pipeline_tower", [](const std::string& dir) {
+        const std::string ws = dir + "/ws";
+        RunOk({"synth",
+               "--scene",
+               "tower",
+               "--output_path",
+               ws,
+               "--image_width",
+               "1200",
+               "--supersampling",
+               "2",
+               "--num_heldout_views",
+               "0",
+               "--num_threads",
+               "2"});
+        const std::string db = ws + "/database.db";
+        RunOk({"features",
+               "--database_path",
+               db,
+               "--image_path",
+               ws + "/images",
+               "--patch_size",
+               "8",
+               "--max_num_features",
+               "0",
+               "--num_threads",
+               "2"});
+        RunOk({"match",
+               "--database_path",
+               db,
+               "--image_path",
+               ws + "/images",
+               "--pairing",
+               "ring",
+               "--num_threads",
+               "2"});
+        testing::CopyTree(db, ws + "/zero_distortion.db");
+        RunOk({"relative", "--database_path", db, "--num_threads", "2"});
+        RunOk({"relative",
+               "--database_path",
+               ws + "/zero_distortion.db",
+               "--assume_zero_distortion",
+               "1",
+               "--num_threads",
+               "2"});
+      });
+}
+
+struct PairError {
+  double rotation_deg = 0;
+  double base_deg = 0;  // angle between the base directions
+};
+
+PairError ErrorAgainst(const Rigid3d& estimate, const Rigid3d& truth) {
+  PairError error;
+  error.rotation_deg =
+      Eigen::AngleAxisd(estimate.rotation.toRotationMatrix().transpose() *
+                        truth.rotation.toRotationMatrix())
+          .angle() /
+      kDeg;
+  const Eigen::Vector3d a = estimate.Center().normalized();
+  const Eigen::Vector3d b = truth.Center().normalized();
+  error.base_deg = std::atan2(a.cross(b).norm(), a.dot(b)) / kDeg;
+  return error;
+}
+
+struct AdjacentPairs {
+  int num_pairs = 0;
+  int num_oriented = 0;
+  int num_within = 0;  // within both bounds
+  double max_rotation_deg = 0;
+  double max_base_deg = 0;
+};
+
+// Every adjacent station pair of the ring (image i with i + 1, the last
+// with the first) in `db_path` against the true poses: one line each.
+AdjacentPairs JudgeAdjacentPairs(const std::string& db_path,
+                                 const Scene& truth,
+                                 double max_rotation_deg,
+                                 double max_base_deg) {
+  Database database(db_path, Database::Mode::kReadOnly);
+  const std::vector<DatabaseImage> images = database.ReadAllImages();
+  AdjacentPairs result;
+  const int n = static_cast<int>(images.size());
+  for (int k = 0; k < n; ++k) {
+    const DatabaseImage& first = images[k];
+    const DatabaseImage& second = images[(k + 1) % n];
+    ++result.num_pairs;
+    const auto record =
+        ReadRelativeOrientation(&database, first.image_id, second.image_id);
+    if (!record || !record->success) {
+      std::printf("  %s - %s: not oriented (%s)\n",
+                  first.name.c_str(),
+                  second.name.c_str(),
+                  record ? record->reason.c_str() : "no matches");
+      continue;
+    }
+    ++result.num_oriented;
+    // The record is cam2_from_cam1 for the pair in id order.
+    const Image* a = truth.FindImageByName(first.name);
+    const Image* b = truth.FindImageByName(second.name);
+    Rigid3d estimate = record->cam2_from_cam1;
+    Rigid3d true_pose = b->cam_from_world * a->cam_from_world.Inverse();
+    if (first.image_id > second.image_id) true_pose = true_pose.Inverse();
+    const PairError error = ErrorAgainst(estimate, true_pose);
+    const bool within =
+        error.rotation_deg < max_rotation_deg && error.base_deg < max_base_deg;
+    result.num_within += within;
+    result.max_rotation_deg =
+        std::max(result.max_rotation_deg, error.rotation_deg);
+    result.max_base_deg = std::max(result.max_base_deg, error.base_deg);
+    std::printf(
+        "  %s - %s: %4d of %4d matches, sigma0 %.3f px, rotation error "
+        "%.4f deg (std %.4f), base error %.3f deg (std %.3f)%s\n",
+        first.name.c_str(),
+        second.name.c_str(),
+        record->num_inliers,
+        record->num_matches,
+        record->sigma0_px,
+        error.rotation_deg,
+        record->std_omega_phi_kappa_deg.norm(),
+        error.base_deg,
+        record->std_base_deg.norm(),
+        within ? "" : "  (outside)");
+  }
+  std::printf(
+      "  %d of %d adjacent pairs oriented, %d within %.2f deg rotation and "
+      "%.1f deg base; largest errors %.4f deg and %.3f deg\n",
+      result.num_oriented,
+      result.num_pairs,
+      result.num_within,
+      max_rotation_deg,
+      max_base_deg,
+      result.max_rotation_deg,
+      result.max_base_deg);
+  return result;
+}
+
+// The issue's bounds for oriented adjacent tower pairs.
+constexpr double kMaxRotationErrorDeg = 0.02;
+constexpr double kMaxBaseErrorDeg = 0.2;
+
+TEST(RelativePipeline, TowerAdjacentPairsAgreeWithTheTruth) {
+  const std::string ws = TowerFixture() + "/ws";
+  const Scene truth = ReadModel(ws + "/gt/sparse");
+  std::printf("tower, true interior orientation:\n");
+  const AdjacentPairs pairs = JudgeAdjacentPairs(
+      ws + "/database.db", truth, kMaxRotationErrorDeg, kMaxBaseErrorDeg);
+  EXPECT_EQ(pairs.num_pairs, 16);
+  // Three adjacent pairs converge by more than 45 degrees by design
+  // (tower_scene.h); the others must be oriented.
+  EXPECT_GE(pairs.num_oriented, 13);
+  EXPECT_EQ(pairs.num_within, pairs.num_oriented)
+      << "oriented adjacent pairs outside " << kMaxRotationErrorDeg
+      << " deg rotation / " << kMaxBaseErrorDeg << " deg base";
+}
+
+// The paper's start: distortion assumed zero. Reported, not bounded (the
+// tower's lens has every Brown/Beyer parameter set), beside the figures
+// with the true interior orientation.
+TEST(RelativePipeline, TowerWithDistortionAssumedZero) {
+  const std::string ws = TowerFixture() + "/ws";
+  const Scene truth = ReadModel(ws + "/gt/sparse");
+  std::printf("tower, distortion assumed zero:\n");
+  const AdjacentPairs pairs = JudgeAdjacentPairs(ws + "/zero_distortion.db",
+                                                 truth,
+                                                 kMaxRotationErrorDeg,
+                                                 kMaxBaseErrorDeg);
+  EXPECT_GT(pairs.num_oriented, 0);
+  Database database(ws + "/zero_distortion.db", Database::Mode::kReadOnly);
+  for (const auto& [pair_id, record] : ReadAllRelativeOrientations(&database)) {
+    EXPECT_TRUE(record.assume_zero_distortion);
+  }
+}
+
+// Stock `colmap mapper` on a copy of `db_path` (COLMAP rewrites the pragmas
+// of databases it opens); returns the folder of the largest model, or empty.
+std::string RunStockMapper(const std::string& db_path,
+                           const std::string& image_path,
+                           const std::string& dir,
+                           const std::vector<std::string>& extra) {
+  CopyDatabaseForColmap(db_path, dir + "/colmap.db");
+  fs::create_directories(dir + "/sparse");
+  std::vector<std::string> args = {"mapper",
+                                   "--database_path",
+                                   dir + "/colmap.db",
+                                   "--image_path",
+                                   image_path,
+                                   "--output_path",
+                                   dir + "/sparse",
+                                   "--Mapper.num_threads",
+                                   "2"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const testing::CommandResult mapper = testing::RunColmap(args);
+  WriteFileAtomically(dir + "/mapper.log", mapper.output);
+  std::string largest;
+  size_t most = 0;
+  for (const auto& entry : fs::directory_iterator(dir + "/sparse")) {
+    if (!fs::exists(entry.path() / "images.bin")) continue;
+    const size_t count = ReadModel(entry.path().string()).images.size();
+    if (count > most) {
+      most = count;
+      largest = entry.path().string();
+    }
+  }
+  return largest;
+}
+
+// Registered images of the largest model (0 without one), and `bayon
+// evaluate`'s table of it against the truth.
+int RegisteredAndEvaluated(const std::string& model,
+                           const std::string& truth,
+                           const std::string& label) {
+  if (model.empty()) {
+    std::printf("%-28s no model\n", label.c_str());
+    return 0;
+  }
+  const testing::CommandResult evaluate =
+      testing::RunBayon({"evaluate",
+                         "--input_path",
+                         model,
+                         "--ground_truth_path",
+                         truth,
+                         "--label",
+                         label});
+  EXPECT_EQ(evaluate.exit_code, 0) << evaluate.output;
+  std::printf("%s", evaluate.output.c_str());
+  return static_cast<int>(ReadModel(model).images.size());
+}
+
+// Mapper options for bayon's databases: the camera is the calibrated one
+// (the true calibration), so it is not refined from the first pair alone.
+const std::vector<std::string> kCalibratedMapper = {
+    "--Mapper.ba_refine_focal_length",
+    "0",
+    "--Mapper.ba_refine_principal_point",
+    "0",
+    "--Mapper.ba_refine_extra_params",
+    "0"};
+
+TEST(RelativePipeline, StockMapperRegistersTheTowerFromBayonsDatabase) {
+  const std::string ws = TowerFixture() + "/ws";
+  const std::string dir = testing::TempDir("relative_pipeline_tower_mapper");
+  const auto before = testing::HashTree(ws + "/database.db");
+  const std::string model = RunStockMapper(
+      ws + "/database.db", ws + "/images", dir, kCalibratedMapper);
+  EXPECT_EQ(testing::HashTree(ws + "/database.db"), before);
+  const int registered =
+      RegisteredAndEvaluated(model, ws + "/gt/sparse", "tower: bayon + mapper");
+  std::printf(
+      "tower: stock colmap mapper registered %d of 16 images "
+      "from bayon's features, match and relative\n",
+      registered);
+  EXPECT_EQ(registered, 16) << "see " << dir << "/mapper.log";
+}
+
+// The temple ring: bayon's chain with the calibrated camera against stock
+// COLMAP's own chain (SIFT, exhaustive matching, mapper; CPU), both
+// evaluated against the calibration (bayon import_ground_truth).
+TEST(RelativePipeline, StockMapperRegistersTheTempleFromBayonsDatabase) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string images = testing::DataPath("temple-ring");
+  const std::string dir = testing::TempDir("relative_pipeline_temple");
+  RunOk({"import_ground_truth",
+         "--format",
+         "middlebury",
+         "--input_path",
+         images + "/templeSR_par.txt",
+         "--output_path",
+         dir + "/gt"});
+  const Scene truth = ReadModel(dir + "/gt");
+  ASSERT_EQ(truth.cameras.size(), 1u);
+
+  // bayon: the calibrated camera, Moravec points on 6-pixel patches (the
+  // object covers a small part of the frame), every pair.
+  const std::string db = dir + "/database.db";
+  RunOk({"import",
+         "--image_path",
+         images,
+         "--database_path",
+         db,
+         "--single_camera",
+         "1",
+         "--camera_model",
+         "PINHOLE"});
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    Camera camera = database.ReadCamera(1);
+    camera.params = truth.cameras.begin()->second.params;
+    camera.has_prior_focal_length = true;
+    database.UpdateCamera(camera);
+  }
+  RunOk({"features",
+         "--database_path",
+         db,
+         "--image_path",
+         images,
+         "--patch_size",
+         "6",
+         "--max_num_features",
+         "0"});
+  RunOk({"match",
+         "--database_path",
+         db,
+         "--image_path",
+         images,
+         "--pairing",
+         "exhaustive",
+         "--num_threads",
+         "2"});
+  RunOk({"relative", "--database_path", db, "--num_threads", "2"});
+  const std::string bayon_model =
+      RunStockMapper(db, images, dir + "/bayon", kCalibratedMapper);
+
+  // Stock COLMAP from the images.
+  fs::create_directories(dir + "/sift");
+  const std::string sift_db = dir + "/sift/database.db";
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{{"feature_extractor",
+                                              "--database_path",
+                                              sift_db,
+                                              "--image_path",
+                                              images,
+                                              "--SiftExtraction.use_gpu",
+                                              "0",
+                                              "--SiftExtraction.num_threads",
+                                              "2"},
+                                             {"exhaustive_matcher",
+                                              "--database_path",
+                                              sift_db,
+                                              "--SiftMatching.use_gpu",
+                                              "0",
+                                              "--SiftMatching.num_threads",
+                                              "2"}}) {
+    const testing::CommandResult result = testing::RunColmap(args);
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+  }
+  const std::string sift_model =
+      RunStockMapper(sift_db, images, dir + "/sift", {});
+
+  const int bayon_registered = RegisteredAndEvaluated(
+      bayon_model, dir + "/gt", "temple: bayon + mapper");
+  const int sift_registered =
+      RegisteredAndEvaluated(sift_model, dir + "/gt", "temple: colmap SIFT");
+  std::printf(
+      "temple: stock colmap mapper registered %d of 16 images from bayon's "
+      "features, match and relative; %d of 16 from its own SIFT\n",
+      bayon_registered,
+      sift_registered);
+  EXPECT_EQ(bayon_registered, 16) << "see " << dir << "/bayon/mapper.log";
+}
+
+// --- Bad input to the chain -------------------------------------------------
+
+// Five images for `relative`'s bad pairs, from two temple stations 23
+// degrees apart (a, b): an exact copy of b, b turned on the spot (a pure
+// rotation of 4 degrees, warped through the calibrated camera) and an
+// almost empty image; with the true camera.
+std::string BadPairsWorkspace(const std::string& dir) {
+  const std::string temple = testing::DataPath("temple-ring");
+  const std::string images = dir + "/images";
+  fs::create_directories(images);
+  fs::copy_file(temple + "/templeSR0001.png", images + "/a.png");
+  fs::copy_file(temple + "/templeSR0002.png", images + "/b.png");
+  fs::copy_file(temple + "/templeSR0002.png", images + "/copy.png");
+  const cv::Mat b = cv::imread(temple + "/templeSR0002.png");
+  // H = K R K^-1 in OpenCV's pixel convention (templeSR_par.txt's).
+  cv::Matx33d K(1520.4, 0, 302.32, 0, 1525.9, 246.87, 0, 0, 1);
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(4 * kDeg, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(2 * kDeg, Eigen::Vector3d::UnitZ()))
+          .toRotationMatrix();
+  cv::Matx33d Rcv;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) Rcv(r, c) = R(r, c);
+  }
+  cv::Mat turned;
+  cv::warpPerspective(b, turned, cv::Mat(K * Rcv * K.inv()), b.size());
+  cv::imwrite(images + "/turned.png", turned);
+  // Flat grey but for a 16 x 16 piece of texture: a few points at most.
+  cv::Mat blank(b.size(), b.type(), cv::Scalar(90, 90, 90));
+  b(cv::Rect(300, 230, 16, 16)).copyTo(blank(cv::Rect(300, 230, 16, 16)));
+  cv::imwrite(images + "/blank.png", blank);
+
+  const std::string db = dir + "/database.db";
+  RunOk({"import",
+         "--image_path",
+         images,
+         "--database_path",
+         db,
+         "--single_camera",
+         "1",
+         "--camera_model",
+         "PINHOLE"});
+  Database database(db, Database::Mode::kReadWrite);
+  Camera camera = database.ReadCamera(1);
+  camera.params = {1520.4, 1525.9, 302.82, 247.37};
+  camera.has_prior_focal_length = true;
+  database.UpdateCamera(camera);
+  return dir;
+}
+
+image_t IdOf(Database* database, const std::string& name) {
+  const auto image = database->ReadImageWithName(name);
+  if (!image) {
+    ADD_FAILURE() << name << " not in the database";
+    return kInvalidImageId;
+  }
+  return image->image_id;
+}
+
+TEST(RelativePipeline, BadPairsAreReportedAndTheOthersOriented) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string dir =
+      BadPairsWorkspace(testing::TempDir("relative_pipeline_bad_pairs"));
+  const std::string db = dir + "/database.db";
+  RunOk({"features", "--database_path", db, "--image_path", dir + "/images"});
+  const testing::CommandResult match = testing::RunBayon({"match",
+                                                          "--database_path",
+                                                          db,
+                                                          "--image_path",
+                                                          dir + "/images",
+                                                          "--pairing",
+                                                          "exhaustive"});
+  ASSERT_EQ(match.exit_code, 0) << match.output;
+  // The almost empty image: its pairs are reported, not written.
+  EXPECT_NE(match.output.find("blank.png: "), std::string::npos);
+  EXPECT_NE(match.output.find("-- not written: too few points to match"),
+            std::string::npos)
+      << match.output;
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    const image_t blank = IdOf(&database, "blank.png");
+    for (const DatabaseImage& image : database.ReadAllImages()) {
+      if (image.image_id != blank) {
+        EXPECT_FALSE(database.ExistsMatches(image.image_id, blank));
+      }
+    }
+    // A pair with too few conjugate points for the orientation (as another
+    // matcher might leave it): 10 of a's and copy's matches.
+    const image_t a = IdOf(&database, "a.png");
+    const image_t copy = IdOf(&database, "copy.png");
+    const FeatureMatches matches = database.ReadMatches(a, copy);
+    ASSERT_GT(matches.rows(), 10);
+    DeletePairResults(&database, a, copy);
+    database.WriteMatches(a, copy, matches.topRows(10));
+  }
+  const testing::CommandResult relative = testing::RunBayon(
+      {"relative", "--database_path", db, "--num_threads", "2"});
+  ASSERT_EQ(relative.exit_code, 0) << relative.output;
+
+  Database database(db, Database::Mode::kReadOnly);
+  const image_t a = IdOf(&database, "a.png"), b = IdOf(&database, "b.png");
+  const image_t copy = IdOf(&database, "copy.png");
+  const image_t turned = IdOf(&database, "turned.png");
+  const auto expect_refused =
+      [&](image_t id1, image_t id2, const std::string& reason) {
+        const auto record = ReadRelativeOrientation(&database, id1, id2);
+        ASSERT_TRUE(record) << id1 << " " << id2;
+        EXPECT_FALSE(record->success) << id1 << " " << id2;
+        EXPECT_NE(record->reason.find(reason), std::string::npos)
+            << id1 << " " << id2 << ": " << record->reason;
+        // Reported in the run's output, and nothing half-done.
+        EXPECT_NE(relative.output.find(record->reason), std::string::npos);
+        EXPECT_FALSE(database.ExistsTwoViewGeometry(id1, id2));
+      };
+  expect_refused(b, copy, "identical images");
+  expect_refused(b, turned, "no base");
+  expect_refused(copy, turned, "no base");
+  expect_refused(a, copy, "too few conjugate points");
+  // The good pairs are still done: a with b, and with b turned.
+  for (const image_t other : {b, turned}) {
+    const auto record = ReadRelativeOrientation(&database, a, other);
+    ASSERT_TRUE(record);
+    EXPECT_TRUE(record->success) << record->reason;
+    EXPECT_TRUE(database.ExistsTwoViewGeometry(a, other));
+  }
+}
+
+// Refused before any work: a database without images (match, relative) and
+// an image missing on disk (match); nothing changed.
+TEST(RelativePipeline, ChainRefusesEmptyDatabasesAndMissingImages) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string dir = testing::TempDir("relative_pipeline_refused");
+  { Database empty(dir + "/empty.db", Database::Mode::kCreate); }
+  const auto empty_before = testing::HashTree(dir + "/empty.db");
+  fs::create_directories(dir + "/none");
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{
+           {"match",
+            "--database_path",
+            dir + "/empty.db",
+            "--image_path",
+            dir + "/none"},
+           {"relative", "--database_path", dir + "/empty.db"}}) {
+    const testing::CommandResult result = testing::RunBayon(args);
+    EXPECT_EQ(result.exit_code, 2) << result.output;
+    EXPECT_NE(result.LastLine().find("empty.db: the database has no images"),
+              std::string::npos)
+        << result.output;
+  }
+  EXPECT_EQ(testing::HashTree(dir + "/empty.db"), empty_before);
+
+  const std::string ws = BadPairsWorkspace(dir + "/ws");
+  const std::string db = ws + "/database.db";
+  RunOk({"features", "--database_path", db, "--image_path", ws + "/images"});
+  fs::rename(ws + "/images/turned.png", ws + "/turned.png");
+  const auto before = testing::HashTree(db);
+  const testing::CommandResult match = testing::RunBayon(
+      {"match", "--database_path", db, "--image_path", ws + "/images"});
+  EXPECT_EQ(match.exit_code, 2) << match.output;
+  EXPECT_NE(match.LastLine().find("turned.png: listed in"), std::string::npos)
+      << match.output;
+  EXPECT_EQ(testing::HashTree(db), before);
+}
+
+}  // namespace
+}  // namespace bayon
