@@ -224,8 +224,8 @@ std::string RunStockMapper(const std::string& db_path,
                            const std::string& image_path,
                            const std::string& dir,
                            const std::vector<std::string>& extra) {
-  CopyDatabaseForColmap(db_path, dir + "/colmap.db");
   fs::create_directories(dir + "/sparse");
+  CopyDatabaseForColmap(db_path, dir + "/colmap.db");
   std::vector<std::string> args = {"mapper",
                                    "--database_path",
                                    dir + "/colmap.db",

@@ -19,7 +19,8 @@ namespace {
 // the linear intensity `border`. Pixels the frame edge crosses are
 // integrated exactly enough (16 x 16 samples), the result blurred by a
 // Gaussian, sRGB-encoded to 8 bits with Gaussian noise, and decoded again
-// by LinearIntensity() as a scan file would be.
+// by MakeLinearScan() as a scan file would be. Like a camera, the
+// channels can be exposed differently and clip after the mixing.
 struct ScanSpec {
   int width = 700;
   int height = 500;
@@ -32,6 +33,8 @@ struct ScanSpec {
   double border = 0.003;
   double blur_sigma_px = 0.7;
   double noise_sigma = 1.0;  // 8-bit grey values
+  // Linear gain of the blue, green and red channels before clipping.
+  Eigen::Vector3d gain = Eigen::Vector3d::Ones();
   // Where it returns true the photograph is as dark as the border.
   std::function<bool(const Eigen::Vector2d& mm)> dark;
   bool fill = false;  // the photograph fills the scan: no border at all
@@ -133,10 +136,11 @@ cv::Mat RenderScan(const ScanSpec& spec) {
   cv::Mat encoded(spec.height, spec.width, CV_8UC3);
   for (int y = 0; y < spec.height; ++y) {
     for (int x = 0; x < spec.width; ++x) {
-      const double v = std::clamp(linear.at<double>(y, x), 0.0, 1.0);
-      const double srgb =
-          v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
       for (int c = 0; c < 3; ++c) {
+        const double v =
+            std::clamp(spec.gain[c] * linear.at<double>(y, x), 0.0, 1.0);
+        const double srgb =
+            v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
         encoded.at<cv::Vec3b>(y, x)[c] = cv::saturate_cast<uint8_t>(
             255 * srgb + (spec.noise_sigma > 0 ? noise(rng) : 0.0));
       }
@@ -149,7 +153,7 @@ VirtualFiducialResult Measure(const ScanSpec& spec,
                               VirtualFiducialOptions options = {}) {
   options.frame_width_mm = spec.frame_width_mm;
   options.frame_height_mm = spec.frame_height_mm;
-  return FindVirtualFiducials(LinearIntensity(RenderScan(spec), true), options);
+  return FindVirtualFiducials(MakeLinearScan(RenderScan(spec), true), options);
 }
 
 // Largest distance between the image coordinates two frames give the same
@@ -317,7 +321,7 @@ TEST(VirtualFiducials, ScansWithoutAFrameFailWithAReason) {
   // A uniform grey scan.
   const cv::Mat uniform(400, 600, CV_8UC1, cv::Scalar(90));
   const VirtualFiducialResult flat =
-      FindVirtualFiducials(LinearIntensity(uniform, true), {});
+      FindVirtualFiducials(MakeLinearScan(uniform, true), {});
   EXPECT_FALSE(flat.success);
   EXPECT_EQ(flat.num_edges, 0);
   EXPECT_NE(flat.reason.find("no frame edges found"), std::string::npos)
@@ -335,13 +339,13 @@ TEST(VirtualFiducials, ScansWithoutAFrameFailWithAReason) {
   // All black.
   const cv::Mat black(400, 600, CV_8UC3, cv::Scalar(0, 0, 0));
   const VirtualFiducialResult dark =
-      FindVirtualFiducials(LinearIntensity(black, true), {});
+      FindVirtualFiducials(MakeLinearScan(black, true), {});
   EXPECT_FALSE(dark.success);
   EXPECT_EQ(dark.num_edges, 0);
 
   // Too small to search.
   const cv::Mat tiny(8, 8, CV_8UC1, cv::Scalar(0));
-  EXPECT_FALSE(FindVirtualFiducials(LinearIntensity(tiny, true), {}).success);
+  EXPECT_FALSE(FindVirtualFiducials(MakeLinearScan(tiny, true), {}).success);
 }
 
 TEST(VirtualFiducials, ShearedFrameIsNotPerpendicular) {
@@ -360,9 +364,9 @@ TEST(VirtualFiducials, ShearedFrameIsNotPerpendicular) {
 TEST(VirtualFiducials, WrongFrameSizeGivesNonSquarePixels) {
   ScanSpec spec;
   VirtualFiducialOptions options;
-  const cv::Mat intensity = LinearIntensity(RenderScan(spec), true);
+  const LinearScan scan = MakeLinearScan(RenderScan(spec), true);
   options.frame_height_mm = 26;  // the frame is 24 mm high
-  const VirtualFiducialResult result = FindVirtualFiducials(intensity, options);
+  const VirtualFiducialResult result = FindVirtualFiducials(scan, options);
   EXPECT_FALSE(result.success);
   EXPECT_NE(result.reason.find("not square"), std::string::npos)
       << result.reason;
@@ -417,20 +421,67 @@ TEST(VirtualFiducials, RobustLineFitRejectsBlunders) {
   EXPECT_NE(few.reason.find("too few edge points"), std::string::npos);
 }
 
-TEST(VirtualFiducials, LinearIntensityDecodesAndReducesColour) {
+TEST(VirtualFiducials, ClippedChannelsAreLeftOut) {
+  // Blue and green exposed 4 x: the photograph clips in them (texture 0.1 to
+  // 0.6 times 4), and a pixel that the edge crosses is no longer the linear
+  // mix of border and scene there; red is not clipped.
+  ScanSpec spec;
+  spec.rotation_deg = 0.8;
+  spec.gain = Eigen::Vector3d(4, 4, 1);
+  const LinearScan scan = MakeLinearScan(RenderScan(spec), true);
+  const VirtualFiducialResult result = FindVirtualFiducials(scan, {});
+  ASSERT_TRUE(result.success) << Describe(result);
+  const double error = MaxCornerError(result, spec);
+  EXPECT_LT(error, 0.06);
+  // Without the masks the clipped channels pull every edge outwards.
+  LinearScan unmasked = scan;
+  for (cv::Mat& mask : unmasked.clipped)
+    mask = cv::Mat::zeros(mask.size(), CV_8U);
+  const VirtualFiducialResult biased = FindVirtualFiducials(unmasked, {});
+  ASSERT_TRUE(biased.success) << Describe(biased);
+  std::cout << "clipped blue and green: corners within " << error
+            << " px; with them " << MaxCornerError(biased, spec) << " px\n";
+  EXPECT_GT(MaxCornerError(biased, spec), 3 * error);
+
+  // The photograph clipped in every channel (0.1 to 0.6 times 20), the
+  // border not (0.06): no edge can be measured.
+  spec.gain = Eigen::Vector3d(20, 20, 20);
+  const VirtualFiducialResult white = Measure(spec);
+  EXPECT_FALSE(white.success);
+  EXPECT_EQ(white.num_edges, 0);
+  EXPECT_GT(white.edges[0].num_saturated_lines, 300);
+  EXPECT_NE(white.reason.find("unclipped"), std::string::npos) << white.reason;
+}
+
+TEST(VirtualFiducials, LinearScanDecodesAndFlagsClippedValues) {
   cv::Mat gray(1, 3, CV_8UC1);
   gray.at<uint8_t>(0, 0) = 0;
   gray.at<uint8_t>(0, 1) = 188;  // sRGB 188 is linear 0.5
   gray.at<uint8_t>(0, 2) = 255;
-  const cv::Mat linear = LinearIntensity(gray, true);
-  EXPECT_FLOAT_EQ(linear.at<float>(0, 0), 0.0f);
-  EXPECT_NEAR(linear.at<float>(0, 1), 0.5, 0.003);
-  EXPECT_FLOAT_EQ(linear.at<float>(0, 2), 1.0f);
-  EXPECT_NEAR(LinearIntensity(gray, false).at<float>(0, 1), 188 / 255.0, 1e-6);
-  cv::Mat colour(1, 1, CV_16UC3, cv::Scalar(65535, 0, 0));  // blue
-  EXPECT_NEAR(LinearIntensity(colour, true).at<float>(0, 0), 0.0722, 1e-6);
-  EXPECT_THROW(LinearIntensity(cv::Mat(2, 2, CV_16SC1), true), InputError);
-  EXPECT_THROW(LinearIntensity(cv::Mat(), true), InputError);
+  const LinearScan linear = MakeLinearScan(gray, true);
+  ASSERT_EQ(linear.channels.size(), 1u);
+  EXPECT_FLOAT_EQ(linear.channels[0].at<float>(0, 0), 0.0f);
+  EXPECT_NEAR(linear.channels[0].at<float>(0, 1), 0.5, 0.003);
+  EXPECT_FLOAT_EQ(linear.channels[0].at<float>(0, 2), 1.0f);
+  EXPECT_EQ(linear.clipped[0].at<uint8_t>(0, 1), 0);
+  EXPECT_EQ(linear.clipped[0].at<uint8_t>(0, 2), 255);
+  EXPECT_NEAR(MakeLinearScan(gray, false).channels[0].at<float>(0, 1),
+              188 / 255.0,
+              1e-6);
+  // 16-bit BGRA: three colour channels, alpha dropped.
+  cv::Mat colour(1, 1, CV_16UC4, cv::Scalar(65535, 0, 1000, 7));
+  const LinearScan bgr = MakeLinearScan(colour, false);
+  ASSERT_EQ(bgr.channels.size(), 3u);
+  EXPECT_EQ(bgr.clipped[0].at<uint8_t>(0, 0), 255);
+  EXPECT_EQ(bgr.clipped[2].at<uint8_t>(0, 0), 0);
+  EXPECT_NEAR(bgr.channels[2].at<float>(0, 0), 1000 / 65535.0, 1e-7);
+  // Floating point: as it is, never clipped.
+  const LinearScan floating =
+      MakeLinearScan(cv::Mat(2, 2, CV_32FC1, cv::Scalar(1.5)), true);
+  EXPECT_FLOAT_EQ(floating.channels[0].at<float>(1, 1), 1.5f);
+  EXPECT_EQ(cv::countNonZero(floating.clipped[0]), 0);
+  EXPECT_THROW(MakeLinearScan(cv::Mat(2, 2, CV_16SC1), true), InputError);
+  EXPECT_THROW(MakeLinearScan(cv::Mat(), true), InputError);
 }
 
 TEST(VirtualFiducials, OptionsAreChecked) {
