@@ -30,12 +30,19 @@ colmap mapper --database_path "$dir/database.db" --image_path "$ws/images" \
   --output_path "$dir/sparse" --Mapper.num_threads "$threads" \
   >"$dir/mapper.log" 2>&1
 mapped=$(date +%s.%N)
-model=$(ls -d "$dir"/sparse/*/ | head -n 1)
+awk -v a="$start" -v b="$extracted" -v c="$matched" -v d="$mapped" 'BEGIN {
+  printf "colmap times: extract %.1f s, match %.1f s, map %.1f s\n", b - a, c - b, d - c }'
+sqlite3 "$dir/database.db" "SELECT 'verified pairs: ' || count(*) || ' of ' ||
+  (SELECT count(*) FROM matches) || ', inlier matches: ' || sum(rows)
+  FROM two_view_geometries WHERE rows > 0"
+model=$(ls -d "$dir"/sparse/*/ 2>/dev/null | head -n 1)
+if [ -z "$model" ]; then
+  echo "tower colmap: registered 0/16 (mapper: $(grep -m1 -E 'No good initial|ERROR' "$dir/mapper.log"))"
+  exit 0
+fi
 colmap model_converter --input_path "$model" --output_path "$model" \
   --output_type TXT >/dev/null 2>&1
 colmap model_analyzer --path "$model" 2>&1 | grep -E "Registered|Points|Mean" || true
-awk -v a="$start" -v b="$extracted" -v c="$matched" -v d="$mapped" 'BEGIN {
-  printf "colmap times: extract %.1f s, match %.1f s, map %.1f s\n", b - a, c - b, d - c }'
 "$BAYON" evaluate --input_path "$model" --ground_truth_path "$ws/gt" \
   --label "tower colmap" --output_path "$dir/evaluation.json"
 echo "outputs and logs in $dir"
