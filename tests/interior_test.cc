@@ -111,9 +111,7 @@ std::map<std::string, InteriorRecord> ReadInteriorsByName(
   return records;
 }
 
-// Issue 5's figure, not reached yet (measured 2026-12-01: corners max 0.257 px
-// within the 0.3 px bound, image coordinates max 0.0103 mm against 0.01 mm).
-TEST(Interior, DISABLED_VirtualFiducialsOnSyntheticFilmScans) {
+TEST(Interior, VirtualFiducialsOnSyntheticFilmScans) {
   const std::string ws = CopyWorkspace("interior_film");
   // The blind database has no frames to start from.
   EXPECT_TRUE(ReadInteriorsByName(ws + "/database.db").empty());

@@ -27,7 +27,7 @@ VirtualFiducialResult MeasureFilmFrame(const std::string& image_file,
   const cv::Mat image = ReadImage(image_file, ImageReadMode::kUnchanged);
   LinearScan scan;
   try {
-    scan = MakeLinearScan(image, options.decode_srgb);
+    scan = MakeLinearScan(image, options.decode_srgb, options.clip_level);
   } catch (const InputError& error) {
     ThrowInputError(image_file, ": ", error.what());
   }

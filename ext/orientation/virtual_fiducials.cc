@@ -28,6 +28,10 @@ void VirtualFiducialOptions::Check() const {
               "VirtualFiducialOptions.scan_resolution_um",
               ">= 0 (0: unknown)",
               scan_resolution_um);
+  CheckOption(clip_level > 0 && clip_level <= 1,
+              "VirtualFiducialOptions.clip_level",
+              "in (0, 1]",
+              clip_level);
   CheckOption(search_fraction > 0 && search_fraction <= 0.5,
               "VirtualFiducialOptions.search_fraction",
               "in (0, 0.5]",
@@ -833,7 +837,9 @@ EdgeLineFit FitEdgeLine(const std::vector<Eigen::Vector2d>& along_across,
   return fit;
 }
 
-LinearScan MakeLinearScan(const cv::Mat& image, bool decode_srgb) {
+LinearScan MakeLinearScan(const cv::Mat& image,
+                          bool decode_srgb,
+                          double clip_level) {
   const int channels = image.channels();
   const int depth = image.depth();
   if (image.empty()) ThrowInputError("an empty image");
@@ -881,7 +887,8 @@ LinearScan MakeLinearScan(const cv::Mat& image, bool decode_srgb) {
       const double* pixel = in + static_cast<size_t>(x) * channels;
       for (int c = 0; c < num_colour; ++c) {
         scan.channels[c].at<float>(y, x) = static_cast<float>(decode(pixel[c]));
-        if (integer && pixel[c] >= 1.0) scan.clipped[c].at<uint8_t>(y, x) = 255;
+        if (integer && pixel[c] >= clip_level)
+          scan.clipped[c].at<uint8_t>(y, x) = 255;
       }
     }
   }
@@ -957,6 +964,16 @@ VirtualFiducialResult FindVirtualFiducials(
   }
   ComputeCorners(&result);
 
+  for (FrameEdge& edge : result.edges) {
+    if (!edge.found && edge.num_saturated_lines > 0) {
+      edge.reason += StrCat(" (",
+                            edge.num_saturated_lines,
+                            " of ",
+                            edge.num_lines,
+                            " scan lines clipped in every channel at the "
+                            "edge)");
+    }
+  }
   for (const FrameEdge& edge : result.edges) {
     if (!edge.found) continue;
     ++result.num_edges;

@@ -98,6 +98,10 @@ struct VirtualFiducialOptions {
   // Decode the sRGB tone curve before measuring (8- and 16-bit scans are
   // usually so encoded); off: the values are taken as linear.
   bool decode_srgb = true;
+  // 8- and 16-bit values at or above this fraction of the top of their
+  // range count as clipped (MakeLinearScan()); below 1 because noise added
+  // after the clipping scatters clipped values just under the top.
+  double clip_level = 0.98;
   // How far into the scan each edge is searched, as a fraction of the scan's
   // width (left, right) or height (top, bottom).
   double search_fraction = 0.25;
@@ -231,7 +235,8 @@ struct VirtualFiducialResult {
 // A scan as the measurement sees it: each colour channel (one for a grey
 // scan; alpha dropped) as CV_32F linear intensity in [0, 1], and for each a
 // CV_8U mask of its clipped pixels (255 where an 8- or 16-bit value is at
-// the top of its range: no longer a linear mix of what the pixel saw).
+// or above clip_level of its range: no longer a linear mix of what the
+// pixel saw).
 struct LinearScan {
   std::vector<cv::Mat> channels;
   std::vector<cv::Mat> clipped;
@@ -242,7 +247,9 @@ struct LinearScan {
 // 8- and 16-bit values scaled to [0, 1] and (decode_srgb) decoded from
 // sRGB; floating-point values taken as they are (never clipped). Throws
 // InputError for an empty image or an unsupported depth or channel count.
-LinearScan MakeLinearScan(const cv::Mat& image, bool decode_srgb);
+LinearScan MakeLinearScan(const cv::Mat& image,
+                          bool decode_srgb,
+                          double clip_level = 0.98);
 
 // Finds the frame in a scan.
 VirtualFiducialResult FindVirtualFiducials(

@@ -421,10 +421,7 @@ TEST(VirtualFiducials, RobustLineFitRejectsBlunders) {
   EXPECT_NE(few.reason.find("too few edge points"), std::string::npos);
 }
 
-// The clipped-channel handling this test asks for is not finished: a white
-// photograph is still reported as 'too few edge points' rather than by its
-// clipping. Disabled until it is.
-TEST(VirtualFiducials, DISABLED_ClippedChannelsAreLeftOut) {
+TEST(VirtualFiducials, ClippedChannelsAreLeftOut) {
   // Blue and green exposed 4 x: the photograph clips in them (texture 0.1 to
   // 0.6 times 4), and a pixel that the edge crosses is no longer the linear
   // mix of border and scene there; red is not clipped.
@@ -452,8 +449,11 @@ TEST(VirtualFiducials, DISABLED_ClippedChannelsAreLeftOut) {
   const VirtualFiducialResult white = Measure(spec);
   EXPECT_FALSE(white.success);
   EXPECT_EQ(white.num_edges, 0);
-  EXPECT_GT(white.edges[0].num_saturated_lines, 300);
-  EXPECT_NE(white.reason.find("unclipped"), std::string::npos) << white.reason;
+  for (const FrameEdge& edge : white.edges) {
+    EXPECT_GT(edge.num_saturated_lines, 300) << FrameSideName(edge.side);
+  }
+  EXPECT_NE(white.reason.find("clipped in every channel"), std::string::npos)
+      << white.reason;
 }
 
 TEST(VirtualFiducials, LinearScanDecodesAndFlagsClippedValues) {
@@ -471,6 +471,13 @@ TEST(VirtualFiducials, LinearScanDecodesAndFlagsClippedValues) {
   EXPECT_NEAR(MakeLinearScan(gray, false).channels[0].at<float>(0, 1),
               188 / 255.0,
               1e-6);
+  // 250 of 255 is above the default clip level 0.98, 249 is not.
+  gray.at<uint8_t>(0, 1) = 250;
+  gray.at<uint8_t>(0, 2) = 249;
+  const LinearScan near_top = MakeLinearScan(gray, true);
+  EXPECT_EQ(near_top.clipped[0].at<uint8_t>(0, 1), 255);
+  EXPECT_EQ(near_top.clipped[0].at<uint8_t>(0, 2), 0);
+  EXPECT_EQ(MakeLinearScan(gray, true, 1.0).clipped[0].at<uint8_t>(0, 1), 0);
   // 16-bit BGRA: three colour channels, alpha dropped.
   cv::Mat colour(1, 1, CV_16UC4, cv::Scalar(65535, 0, 1000, 7));
   const LinearScan bgr = MakeLinearScan(colour, false);
