@@ -21,6 +21,7 @@ int RunMesh(int argc, char** argv);
 int RunSynthCloud(int argc, char** argv);
 int RunMatch(int argc, char** argv);
 int RunRelative(int argc, char** argv);
+int RunDisparity(int argc, char** argv);
 int RunRefineKeypoints(int argc, char** argv);
 
 }  // namespace bayon
