@@ -109,7 +109,8 @@ PixelRays::PixelRays(const Camera& camera,
 
 bool PixelRays::Ray(const Eigen::Vector2d& pixel,
                     Eigen::Vector2d* uv,
-                    double* residual_px) const {
+                    double* residual_px,
+                    Eigen::Matrix2d* uv_from_pixel) const {
   const double step = options_.grid_step;
   const int ix = std::clamp(
       static_cast<int>(std::floor(pixel.x() / step)), 0, num_nodes_x_ - 2);
@@ -137,8 +138,12 @@ bool PixelRays::Ray(const Eigen::Vector2d& pixel,
     }
     *uv = ray.head<2>();
     if (residual_px) *residual_px = (Project(*uv) - pixel).norm();
+    if (uv_from_pixel) {
+      uv_from_pixel->setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
     return true;
   }
+  if (uv_from_pixel) *uv_from_pixel = inverse_jacobian;
   // Newton steps on the forward model. From the interpolated start one
   // step suffices (the start is within ~1e-3 px, the interpolated Jacobian
   // within ~1e-4 relative, so the step lands within ~1e-7 px); further steps

@@ -60,10 +60,14 @@ class PixelRays {
   // Normalized coordinates (u, v) of the ray (u, v, 1) in the camera frame
   // (x right, y down, z forward) through `pixel`. Returns false where the
   // model has no inverse (far outside a calibrated frame). `residual_px`,
-  // when given, receives the re-projection miss of the result.
+  // when given, receives the re-projection miss of the result;
+  // `uv_from_pixel`, when given, the derivative d uv / d pixel there (the
+  // interpolated inverse Jacobian, ~1e-4 relative), or NaNs where the slow
+  // exact inverse had to be used.
   bool Ray(const Eigen::Vector2d& pixel,
            Eigen::Vector2d* uv,
-           double* residual_px = nullptr) const;
+           double* residual_px = nullptr,
+           Eigen::Matrix2d* uv_from_pixel = nullptr) const;
 
   // The box of normalized coordinates that contains the rays of every
   // position of the image, and the largest magnification |d pixel / d uv|

@@ -74,6 +74,36 @@ TEST(PixelRays, ColmapModelRaysReprojectExactly) {
   ExpectExactRays(camera, std::nullopt);
 }
 
+// The renderer extrapolates the rays of the supersamples of a pixel from
+// the exact pixel-centre ray and its derivative: within a third of a pixel
+// that stays far below anything an image can show (1e-4 px).
+TEST(PixelRays, DerivativeExtrapolatesWithinAPixel) {
+  SyntheticCameraOptions options;
+  options.width = 2000;
+  options.height = 1400;
+  const Camera camera = SyntheticCamera(options);
+  const ImageFrame frame = ScanFrame(options.pixel_pitch_mm, 2000, 1400);
+  const PixelRays rays(camera, frame);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> x(1, camera.width - 1),
+      y(1, camera.height - 1), offset(-0.5, 0.5);
+  double max_miss_px = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector2d center(x(rng), y(rng));
+    Eigen::Vector2d uv;
+    Eigen::Matrix2d uv_from_pixel;
+    ASSERT_TRUE(rays.Ray(center, &uv, nullptr, &uv_from_pixel));
+    ASSERT_TRUE(uv_from_pixel.allFinite());
+    const Eigen::Vector2d sample =
+        center + Eigen::Vector2d(offset(rng), offset(rng));
+    const Eigen::Vector2d extrapolated = uv + uv_from_pixel * (sample - center);
+    const Eigen::Vector2d back = camera.ImgFromCam(
+        Eigen::Vector3d(extrapolated.x(), extrapolated.y(), 1), &frame);
+    max_miss_px = std::max(max_miss_px, (back - sample).norm());
+  }
+  EXPECT_LT(max_miss_px, 1e-4);
+}
+
 TEST(PixelRays, MagnificationIsTheFocalLengthForAPinhole) {
   const Camera camera = Camera::Create(CameraModelId::kPinhole, 800, 640, 480);
   const PixelRays rays(camera);

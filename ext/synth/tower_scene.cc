@@ -2,6 +2,7 @@
 #include "ext/synth/tower_scene.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/parallel.h"
 
 #include <Eigen/Geometry>
 
@@ -343,13 +344,16 @@ cv::Mat RenderTowerPhotograph(const TowerScene& scene,
   render_options.border_bgr =
       Eigen::Vector3f::Constant(static_cast<float>(0.003 / station.exposure));
   RenderResult result = renderer.Render(view, station.lighting, render_options);
-  // Tone curve, then sensor noise in grey values, deterministic per image.
+  // Tone curve, then sensor noise in grey values, deterministic per image
+  // and row (rows in parallel).
   cv::Mat photo(result.color.size(), CV_8UC3);
-  std::mt19937 rng(options.seed * 104729u + static_cast<uint32_t>(index));
-  std::normal_distribution<double> noise(0, options.noise_sigma);
   static const SrgbCurve srgb;
   const float exposure = static_cast<float>(station.exposure);
-  for (int y = 0; y < photo.rows; ++y) {
+  ParallelFor(photo.rows, options.num_threads, [&](int y) {
+    std::seed_seq seed{
+        options.seed, static_cast<uint32_t>(index), static_cast<uint32_t>(y)};
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0, options.noise_sigma);
     const cv::Vec3f* in = result.color.ptr<cv::Vec3f>(y);
     cv::Vec3b* out = photo.ptr<cv::Vec3b>(y);
     for (int x = 0; x < photo.cols; ++x) {
@@ -359,7 +363,7 @@ cv::Mat RenderTowerPhotograph(const TowerScene& scene,
         out[x][c] = cv::saturate_cast<uint8_t>(value);
       }
     }
-  }
+  });
   if (render) *render = std::move(result);
   return photo;
 }
