@@ -2,6 +2,7 @@
 #include "ext/colmap/database.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/file_util.h"
 
 #include <Eigen/Dense>
 
@@ -850,6 +851,54 @@ void Database::DeleteTwoViewGeometry(image_t image_id1, image_t image_id2) {
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   statement.Execute();
+}
+
+void CheckDerivedDatabasePath(const std::string& database_path,
+                              const std::string& output_path,
+                              bool overwrite,
+                              const std::string& what) {
+  namespace fs = std::filesystem;
+  if (output_path.empty()) ThrowInputError(what, ": no output path");
+  std::error_code ec;
+  if (fs::exists(output_path, ec) &&
+      fs::equivalent(database_path, output_path, ec)) {
+    ThrowInputError(output_path,
+                    ": the output is the input database; ",
+                    what,
+                    " writes a new database");
+  }
+  CheckOutputPath(output_path, overwrite);
+  const fs::path parent = fs::absolute(output_path).parent_path();
+  if (!fs::is_directory(parent, ec)) {
+    ThrowInputError(
+        output_path, ": the output folder ", parent, " does not exist");
+  }
+}
+
+void WriteDerivedDatabase(const std::string& database_path,
+                          const std::string& output_path,
+                          const std::function<void(Database*)>& modify) {
+  namespace fs = std::filesystem;
+  const std::string temp_path = output_path + TempSuffix();
+  TempFileGuard guard(temp_path);
+  CopySqliteDatabase(database_path, temp_path);
+  {
+    Database database(temp_path, Database::Mode::kReadWrite);
+    SqliteTransaction transaction = database.BeginTransaction();
+    modify(&database);
+    transaction.Commit();
+  }
+  // A journal left beside an older output would be replayed into the new
+  // file: remove the companions before the rename.
+  std::error_code ec;
+  for (const char* suffix : {"-journal", "-wal", "-shm"}) {
+    fs::remove(output_path + suffix, ec);
+  }
+  fs::rename(temp_path, output_path, ec);
+  if (ec) {
+    ThrowInputError(output_path, ": cannot write (", ec.message(), ")");
+  }
+  guard.Keep();
 }
 
 }  // namespace bayon

@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -193,5 +194,21 @@ class Database {
 
 // Inverts a two-view geometry so that it describes (image 2, image 1).
 TwoViewGeometry InvertTwoViewGeometry(const TwoViewGeometry& geometry);
+
+// For stages that write a new database derived from the user's (which is
+// never modified): the checks on the output path (not empty, not the input,
+// its folder exists, an existing file only with `overwrite`; InputError
+// naming `what` otherwise), then the copy. WriteDerivedDatabase copies
+// `database_path` (SQLite's backup) to a temporary name beside
+// `output_path`, calls `modify` on it inside one transaction, and renames
+// it to `output_path` when complete; on any error the temporary file is
+// removed and nothing else changes.
+void CheckDerivedDatabasePath(const std::string& database_path,
+                              const std::string& output_path,
+                              bool overwrite,
+                              const std::string& what);
+void WriteDerivedDatabase(const std::string& database_path,
+                          const std::string& output_path,
+                          const std::function<void(Database*)>& modify);
 
 }  // namespace bayon

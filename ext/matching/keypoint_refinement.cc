@@ -333,6 +333,8 @@ ObservationRefinement RefineObservation(
   result.sigma0 = forward.sigma0;
   result.correlation = forward.correlation;
   result.sigma_xy = forward.sigma_xy;
+  result.covariance_xy = forward.covariance_xy;
+  result.shape = forward.params.Shape();
   result.outcome = OutcomeOfLsm(forward.status);
   if (forward.status != LsmStatus::kOutsideImage &&
       forward.status != LsmStatus::kFlatPatch &&
@@ -481,26 +483,6 @@ struct RefinementInput {
   std::vector<std::pair<pair_t, FeatureMatches>> matches;
   std::string match_source;
 };
-
-void CheckPaths(const std::string& database_path,
-                const std::string& output_path,
-                bool overwrite) {
-  CheckFileExists(database_path, "--database_path");
-  if (output_path.empty()) ThrowInputError("--output_path is required");
-  std::error_code ec;
-  if (fs::exists(output_path, ec) &&
-      fs::equivalent(database_path, output_path, ec)) {
-    ThrowInputError(output_path,
-                    ": the output is the input database; refine_keypoints "
-                    "writes a new database");
-  }
-  CheckOutputPath(output_path, overwrite);
-  const fs::path parent = fs::absolute(output_path).parent_path();
-  if (!fs::is_directory(parent, ec)) {
-    ThrowInputError(
-        output_path, ": the output folder ", parent, " does not exist");
-  }
-}
 
 // Matches, keypoints and images; every match index is checked against its
 // image's keypoints.
@@ -691,35 +673,6 @@ void Summarise(const RefinementInput& input,
                 all_shifts.size();
 }
 
-// A copy of the input with the refined keypoints rows, under a temporary
-// name, renamed to `output_path` when complete.
-void WriteRefinedDatabase(const std::string& database_path,
-                          const std::string& output_path,
-                          const std::map<image_t, FeatureKeypoints>& refined) {
-  const std::string temp_path = output_path + TempSuffix();
-  TempFileGuard guard(temp_path);
-  CopySqliteDatabase(database_path, temp_path);
-  {
-    Database database(temp_path, Database::Mode::kReadWrite);
-    SqliteTransaction transaction = database.BeginTransaction();
-    for (const auto& [image_id, keypoints] : refined) {
-      database.WriteKeypoints(image_id, keypoints);
-    }
-    transaction.Commit();
-  }
-  // A journal left beside an older output would be replayed into the new
-  // file: remove the companions before the rename.
-  std::error_code ec;
-  for (const char* suffix : {"-journal", "-wal", "-shm"}) {
-    fs::remove(output_path + suffix, ec);
-  }
-  fs::rename(temp_path, output_path, ec);
-  if (ec) {
-    ThrowInputError(output_path, ": cannot write (", ec.message(), ")");
-  }
-  guard.Keep();
-}
-
 }  // namespace
 
 KeypointRefinementSummary RefineDatabaseKeypoints(
@@ -730,7 +683,9 @@ KeypointRefinementSummary RefineDatabaseKeypoints(
     const KeypointRefinementOptions& options) {
   options.Check();
   const Timer total;
-  CheckPaths(database_path, output_path, overwrite);
+  CheckFileExists(database_path, "--database_path");
+  CheckDerivedDatabasePath(
+      database_path, output_path, overwrite, "refine_keypoints");
   CheckDirectoryExists(image_path, "--image_path");
   KeypointRefinementSummary summary;
 
@@ -752,7 +707,12 @@ KeypointRefinementSummary RefineDatabaseKeypoints(
   summary.refine_seconds = timer.Seconds();
 
   timer = Timer();
-  WriteRefinedDatabase(database_path, output_path, refined);
+  // A copy of the input with the refined keypoints rows.
+  WriteDerivedDatabase(database_path, output_path, [&](Database* database) {
+    for (const auto& [image_id, keypoints] : refined) {
+      database->WriteKeypoints(image_id, keypoints);
+    }
+  });
   summary.write_seconds = timer.Seconds();
   summary.seconds = total.Seconds();
   return summary;

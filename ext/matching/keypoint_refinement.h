@@ -154,6 +154,9 @@ struct ObservationRefinement {
   // original where it found nothing): for judging the blunder checks.
   Eigen::Vector2d matched_xy = Eigen::Vector2d::Zero();
   Eigen::Vector2d sigma_xy = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d covariance_xy = Eigen::Matrix2d::Zero();  // pixels^2
+  // The estimated patch shape (search pixels per reference pixel).
+  Eigen::Matrix2d shape = Eigen::Matrix2d::Identity();
   double sigma0 = 0;
   double correlation = 0;
   double backmatch_px = 0;  // distance of the back-match from the reference
