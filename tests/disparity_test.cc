@@ -25,42 +25,10 @@
 #include <map>
 
 #include "tests/testing.h"
+#include "tests/tower_fixture.h"
 
 namespace bayon {
 namespace {
-
-void Run(const std::vector<std::string>& args) {
-  const testing::CommandResult result = testing::RunBayon(args);
-  ASSERT_EQ(result.exit_code, 0) << result.output;
-}
-
-// A tower ring of 16 views at 1200 x 800, matched with its neighbours and
-// oriented (built once per build of bayon).
-std::string OrientedTowerFixture() {
-  return testing::SharedFixture("disparity_tower", [](const std::string& dir) {
-    const std::string ws = dir + "/ws";
-    Run({"synth", "--scene",          "tower", "--output_path",
-         ws,      "--num_views",      "16",    "--image_width",
-         "1200",  "--mesh_spacing_m", "0.04",  "--texel_size_m",
-         "0.01",  "--supersampling",  "1",     "--num_heldout_views",
-         "0",     "--seed",           "2",     "--num_threads",
-         "2"});
-    const std::string db = ws + "/database.db";
-    Run({"features", "--database_path", db, "--image_path", ws + "/images"});
-    Run({"match",
-         "--database_path",
-         db,
-         "--image_path",
-         ws + "/images",
-         "--pairing",
-         "ring",
-         "--num_neighbors",
-         "1",
-         "--num_threads",
-         "2"});
-    Run({"relative", "--database_path", db, "--num_threads", "2"});
-  });
-}
 
 double Quantile(std::vector<double> values, double q) {
   if (values.empty()) return 0;
@@ -87,7 +55,7 @@ constexpr int kSample1 = 8;
 constexpr int kSample2 = 2;
 
 TEST(Disparity, TowerBandsHoldTheTruthAndAreNarrow) {
-  const std::string fixture = OrientedTowerFixture();
+  const std::string fixture = testing::OrientedTowerFixture();
   const std::string dir = testing::TempDir("disparity_tower");
   testing::CopyTree(fixture + "/ws/database.db", dir + "/database.db");
   const std::string db_path = dir + "/database.db";

@@ -22,6 +22,7 @@ int RunSynthCloud(int argc, char** argv);
 int RunMatch(int argc, char** argv);
 int RunRelative(int argc, char** argv);
 int RunDisparity(int argc, char** argv);
+int RunTiePoints(int argc, char** argv);
 int RunRefineKeypoints(int argc, char** argv);
 
 }  // namespace bayon
