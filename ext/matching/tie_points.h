@@ -68,10 +68,16 @@ KeypointRefinementOptions DefaultTieMatchingOptions();
 struct TiePointOptions {
   // Least-squares matching and its blunder checks (patch 21 x 21).
   KeypointRefinementOptions matching = DefaultTieMatchingOptions();
-  // Candidates: a grid of cells over each image, this many per cell.
-  int grid_cols = 12;
-  int grid_rows = 8;
-  int candidates_per_cell = 4;
+  // Candidates: a grid of cells over each image, this many per cell. Most
+  // candidates find no conjugate that every check accepts (on the rendered
+  // tower, least-squares matching started at the TRUE conjugate converges
+  // within the checks for about one visible point in five: weak stone
+  // texture and changing light), so it takes many candidates to keep a few
+  // hundred points: 4 per cell of a 12 x 8 grid gave 64, 6 per cell of
+  // 16 x 12 gives 233 (tests/tiepoints_test.cc).
+  int grid_cols = 16;
+  int grid_rows = 12;
+  int candidates_per_cell = 6;
   // Candidates whose patch texture score (grey values^2 per pixel^2) is
   // below this are not followed.
   double min_texture_score = 4.0;
