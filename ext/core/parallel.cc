@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <thread>
 
 namespace bayon {
@@ -32,6 +33,18 @@ void ParallelFor(int n, int num_threads, const std::function<void(int)>& fn) {
         },
         tbb::simple_partitioner());
   });
+}
+
+void ParallelBatches(int n,
+                     int num_threads,
+                     const std::function<void(int)>& compute,
+                     const std::function<void(int, int)>& store) {
+  const int batch = 8 * EffectiveNumThreads(num_threads);
+  for (int start = 0; start < n; start += batch) {
+    const int end = std::min(n, start + batch);
+    ParallelFor(end - start, num_threads, [&](int k) { compute(start + k); });
+    store(start, end);
+  }
 }
 
 }  // namespace bayon

@@ -20,4 +20,14 @@ int EffectiveNumThreads(int num_threads);
 // the loop stops.
 void ParallelFor(int n, int num_threads, const std::function<void(int)>& fn);
 
+// Items computed in parallel and stored by one thread (a stage that writes
+// each result into the database as it comes, in one transaction per batch,
+// instead of holding all of them): [0, n) in batches of 8 items per thread;
+// compute(i) runs on the threads (ParallelFor), then store(begin, end) on
+// the calling thread, before the next batch starts.
+void ParallelBatches(int n,
+                     int num_threads,
+                     const std::function<void(int)>& compute,
+                     const std::function<void(int, int)>& store);
+
 }  // namespace bayon

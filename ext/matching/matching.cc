@@ -255,29 +255,30 @@ MatchingSummary MatchImages(const std::string& database_path,
     }
   }
   Progress progress("Matching image pairs", todo.size(), "pairs");
-  const int batch = 8 * EffectiveNumThreads(options.num_threads);
-  for (size_t start = 0; start < todo.size(); start += batch) {
-    const size_t end = std::min(todo.size(), start + batch);
-    ParallelFor(end - start, options.num_threads, [&](int k) {
-      MatchPair(data, options, &jobs[todo[start + k]]);
-      progress.Add();
-    });
-    auto transaction = database.BeginTransaction();
-    for (size_t k = start; k < end; ++k) {
-      PairJob& job = jobs[todo[k]];
-      if (!job.report.reason.empty()) {
-        // What an earlier run found for this pair no longer stands.
-        if (options.overwrite) {
-          DeletePairResults(
-              &database, job.report.image_id1, job.report.image_id2);
+  ParallelBatches(
+      static_cast<int>(todo.size()),
+      options.num_threads,
+      [&](int k) {
+        MatchPair(data, options, &jobs[todo[k]]);
+        progress.Add();
+      },
+      [&](int begin, int end) {
+        auto transaction = database.BeginTransaction();
+        for (int k = begin; k < end; ++k) {
+          PairJob& job = jobs[todo[k]];
+          if (!job.report.reason.empty()) {
+            // What an earlier run found for this pair no longer stands.
+            if (options.overwrite) {
+              DeletePairResults(
+                  &database, job.report.image_id1, job.report.image_id2);
+            }
+            continue;
+          }
+          WritePair(&database, options, job);
+          job.report.written = true;
         }
-        continue;
-      }
-      WritePair(&database, options, job);
-      job.report.written = true;
-    }
-    transaction.Commit();
-  }
+        transaction.Commit();
+      });
   progress.Finish();
 
   for (const PairJob& job : jobs) {

@@ -279,22 +279,25 @@ DisparitySummary FitDisparitySurfaces(const std::string& database_path,
     if (!jobs[i].report.skipped) todo.push_back(i);
   }
   Progress progress("Disparity surfaces", todo.size(), "surfaces");
-  const int batch = 8 * EffectiveNumThreads(options.num_threads);
-  for (size_t start = 0; start < todo.size(); start += batch) {
-    const size_t end = std::min(todo.size(), start + batch);
-    ParallelFor(end - start, options.num_threads, [&](int k) {
-      FitJob(options.surface, &jobs[todo[start + k]]);
-      progress.Add();
-    });
-    auto transaction = database.BeginTransaction();
-    for (size_t k = start; k < end; ++k) {
-      SurfaceJob& job = jobs[todo[k]];
-      WriteDisparitySurface(
-          &database, job.report.image_id1, job.report.image_id2, job.record);
-      job.points = ConjugatePoints();
-    }
-    transaction.Commit();
-  }
+  ParallelBatches(
+      static_cast<int>(todo.size()),
+      options.num_threads,
+      [&](int k) {
+        FitJob(options.surface, &jobs[todo[k]]);
+        progress.Add();
+      },
+      [&](int begin, int end) {
+        auto transaction = database.BeginTransaction();
+        for (int k = begin; k < end; ++k) {
+          SurfaceJob& job = jobs[todo[k]];
+          WriteDisparitySurface(&database,
+                                job.report.image_id1,
+                                job.report.image_id2,
+                                job.record);
+          job.points = ConjugatePoints();
+        }
+        transaction.Commit();
+      });
   progress.Finish();
 
   DisparitySummary summary;

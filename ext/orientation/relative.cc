@@ -266,20 +266,24 @@ RelativeSummary OrientImagePairs(const std::string& database_path,
     }
   }
   Progress progress("Relative orientation", todo.size(), "pairs");
-  const int batch = 8 * EffectiveNumThreads(options.num_threads);
-  for (size_t start = 0; start < todo.size(); start += batch) {
-    const size_t end = std::min(todo.size(), start + batch);
-    ParallelFor(end - start, options.num_threads, [&](int k) {
-      OrientPair(keypoints, vectors, options, &jobs[todo[start + k]]);
-      progress.Add();
-    });
-    auto transaction = database.BeginTransaction();
-    for (size_t k = start; k < end; ++k) {
-      WritePair(
-          &database, colmap_cameras, camera_of_image, options, jobs[todo[k]]);
-    }
-    transaction.Commit();
-  }
+  ParallelBatches(
+      static_cast<int>(todo.size()),
+      options.num_threads,
+      [&](int k) {
+        OrientPair(keypoints, vectors, options, &jobs[todo[k]]);
+        progress.Add();
+      },
+      [&](int begin, int end) {
+        auto transaction = database.BeginTransaction();
+        for (int k = begin; k < end; ++k) {
+          WritePair(&database,
+                    colmap_cameras,
+                    camera_of_image,
+                    options,
+                    jobs[todo[k]]);
+        }
+        transaction.Commit();
+      });
   progress.Finish();
 
   RelativeSummary summary;
