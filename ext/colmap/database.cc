@@ -853,6 +853,28 @@ void Database::DeleteTwoViewGeometry(image_t image_id1, image_t image_id2) {
   statement.Execute();
 }
 
+std::map<image_t, Camera> ReadImageCameras(
+    Database* database, const std::vector<DatabaseImage>& images) {
+  std::map<camera_t, Camera> cameras;
+  for (const Camera& camera : database->ReadAllCameras()) {
+    cameras.emplace(camera.camera_id, camera);
+  }
+  std::map<image_t, Camera> of_image;
+  for (const DatabaseImage& image : images) {
+    const auto camera = cameras.find(image.camera_id);
+    if (camera == cameras.end()) {
+      ThrowInputError(database->path(),
+                      ": image ",
+                      image.name,
+                      " refers to camera ",
+                      image.camera_id,
+                      ", which is not in the cameras table");
+    }
+    of_image.emplace(image.image_id, camera->second);
+  }
+  return of_image;
+}
+
 void CheckDerivedDatabasePath(const std::string& database_path,
                               const std::string& output_path,
                               bool overwrite,

@@ -22,6 +22,7 @@
 
 #include <array>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -194,6 +195,11 @@ class Database {
 
 // Inverts a two-view geometry so that it describes (image 2, image 1).
 TwoViewGeometry InvertTwoViewGeometry(const TwoViewGeometry& geometry);
+
+// The cameras-table row of each image, by image id. Throws InputError
+// naming the first image whose camera is not in the table.
+std::map<image_t, Camera> ReadImageCameras(
+    Database* database, const std::vector<DatabaseImage>& images);
 
 // For stages that write a new database derived from the user's (which is
 // never modified): the checks on the output path (not empty, not the input,

@@ -45,29 +45,18 @@ std::vector<Job> PlanJobs(Database* database,
                     ": the database has no images (run `bayon import` or "
                     "`colmap feature_extractor` first)");
   }
-  std::map<camera_t, Camera> cameras;
-  for (const Camera& camera : database->ReadAllCameras()) {
-    cameras.emplace(camera.camera_id, camera);
-  }
+  const std::map<image_t, Camera> cameras = ReadImageCameras(database, images);
   std::vector<ExpectedImage> expected;
   std::vector<Job> jobs;
   for (const DatabaseImage& image : images) {
-    const auto camera = cameras.find(image.camera_id);
-    if (camera == cameras.end()) {
-      ThrowInputError(database->path(),
-                      ": image ",
-                      image.name,
-                      " refers to camera ",
-                      image.camera_id,
-                      ", which is not in the cameras table");
-    }
+    const Camera& camera = cameras.at(image.image_id);
     Job job;
     job.image = image;
     job.path = (fs::path(image_path) / image.name).string();
     job.result.image_id = image.image_id;
     job.result.name = image.name;
-    job.result.width = static_cast<int>(camera->second.width);
-    job.result.height = static_cast<int>(camera->second.height);
+    job.result.width = static_cast<int>(camera.width);
+    job.result.height = static_cast<int>(camera.height);
     expected.push_back({image.name, job.result.width, job.result.height});
     if (!options.overwrite && database->ExistsKeypoints(image.image_id) &&
         database->ReadKeypoints(image.image_id).rows() > 0) {

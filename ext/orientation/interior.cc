@@ -114,10 +114,7 @@ std::vector<Job> PlanJobs(Database* database,
                     ": the database has no images (run `bayon import` or "
                     "`colmap feature_extractor` first)");
   }
-  std::map<camera_t, Camera> cameras;
-  for (const Camera& camera : database->ReadAllCameras()) {
-    cameras.emplace(camera.camera_id, camera);
-  }
+  const std::map<image_t, Camera> cameras = ReadImageCameras(database, images);
   std::map<camera_t, CalibrationRecord> calibrations;
   if (BayonTableExists(database, kCalibrationTable.name)) {
     calibrations = ReadAllCalibrations(database);
@@ -125,19 +122,10 @@ std::vector<Job> PlanJobs(Database* database,
   std::vector<ExpectedImage> expected;
   std::vector<Job> jobs;
   for (const DatabaseImage& image : images) {
-    const auto camera = cameras.find(image.camera_id);
-    if (camera == cameras.end()) {
-      ThrowInputError(database->path(),
-                      ": image ",
-                      image.name,
-                      " refers to camera ",
-                      image.camera_id,
-                      ", which is not in the cameras table");
-    }
     Job job;
     job.image = image;
     job.path = (fs::path(image_path) / image.name).string();
-    job.camera = camera->second;
+    job.camera = cameras.at(image.image_id);
     const auto calibration = calibrations.find(image.camera_id);
     if (calibration != calibrations.end()) {
       job.camera = calibration->second.camera;
