@@ -3,13 +3,17 @@
 // bayon adjust end to end on synthetic workspaces with known truth (control
 // points, check points and a levelling bar from `bayon synth`), and on a
 // stock `colmap mapper` model hosted in its database; bad input.
+#include "ext/colmap/database.h"
 #include "ext/colmap/model_io.h"
+#include "ext/colmap/table_tie_points.h"
 #include "ext/core/file_util.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
+#include <map>
 #include <random>
 
 #include "tests/testing.h"
@@ -268,6 +272,121 @@ TEST(Adjust, StripThenAdjust) {
                                                           dir + "/log"});
   EXPECT_EQ(again.exit_code, 2) << again.output;
   EXPECT_EQ(testing::HashTree(dir + "/initial"), before);
+}
+
+// bayon tiepoints' output in the database: the keypoints of the points seen
+// in three or more images (0.3 px noise) as least-squares tie points with
+// that precision. strip and adjust take them (auto) beside the tracks, or
+// alone (alsm): weighted by their covariance, sigma0 a priori the median
+// one, the model's 2D points the keypoints and then the tie observations.
+TEST(Adjust, TiePointsFromTheDatabase) {
+  const std::string ws = SyntheticWorkspace();
+  const std::string dir = testing::TempDir("adjust_tie_points");
+  const std::string db = dir + "/database.db";
+  fs::copy_file(ws + "/database.db", db);
+  std::map<image_t, size_t> num_ties;
+  {
+    const Scene initial = ReadModel(ws + "/sparse/initial");
+    Database database(db, Database::Mode::kReadWrite);
+    std::vector<TiePointRecord> points;
+    for (const auto& [id, point] : initial.points3D) {
+      if (point.track.size() < 3) continue;
+      TiePointRecord record;
+      record.source = "alsm";
+      for (const TrackElement& element : point.track) {
+        TieObservation observation;
+        observation.image_id = element.image_id;
+        observation.xy = KeypointXY(database.ReadKeypoints(element.image_id),
+                                    element.point2D_idx);
+        observation.covariance = 0.09 * Eigen::Matrix2d::Identity();
+        record.observations.push_back(observation);
+        ++num_ties[element.image_id];
+      }
+      std::sort(
+          record.observations.begin(),
+          record.observations.end(),
+          [](const auto& a, const auto& b) { return a.image_id < b.image_id; });
+      points.push_back(std::move(record));
+    }
+    WriteTiePoints(&database, points);
+  }
+  RunOk({"strip",
+         "--database_path",
+         db,
+         "--output_path",
+         dir + "/initial",
+         "--control_path",
+         ws + "/control",
+         "--log_path",
+         dir + "/log"});
+  const nlohmann::json strip = ReadJson(dir + "/initial/strip.json");
+  EXPECT_GT(strip["num_alsm_tie_points"].get<int>(), 300);
+  // Alone: sigma0 a priori = the tie points' 0.3 px, variance factor 1.
+  RunOk({"adjust",
+         "--database_path",
+         db,
+         "--input_path",
+         dir + "/initial",
+         "--output_path",
+         dir + "/alsm",
+         "--control_path",
+         ws + "/control",
+         "--tie_points",
+         "alsm",
+         "--log_path",
+         dir + "/log"});
+  const nlohmann::json report = ReadJson(dir + "/alsm/adjustment.json");
+  const nlohmann::json& s = report["statistics"];
+  EXPECT_NEAR(s["sigma0_apriori_px"].get<double>(), 0.3, 1e-6);
+  EXPECT_NEAR(s["variance_factor"].get<double>(), 1.0, 0.1);
+  for (const auto& p : report["check_points"]["points"]) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LT(std::abs(p["difference_mm"][k].get<double>()),
+                3 * p["std_dev_mm"][k].get<double>())
+          << p.dump();
+    }
+  }
+  const Scene alsm = ReadModel(dir + "/alsm");
+  for (const auto& [id, image] : alsm.images) {
+    EXPECT_EQ(image.points2D.size(), num_ties.at(id)) << image.name;
+  }
+  const testing::CommandResult analyzer =
+      testing::RunColmap({"model_analyzer", "--path", dir + "/alsm"});
+  EXPECT_EQ(analyzer.exit_code, 0) << analyzer.output;
+  // Both (auto), from the tie-point-only model: keypoints first again.
+  RunOk({"adjust",
+         "--database_path",
+         db,
+         "--input_path",
+         dir + "/alsm",
+         "--output_path",
+         dir + "/both",
+         "--control_path",
+         ws + "/control",
+         "--log_path",
+         dir + "/log"});
+  Database database(db, Database::Mode::kReadOnly);
+  const Scene both = ReadModel(dir + "/both");
+  for (const auto& [id, image] : both.images) {
+    EXPECT_EQ(static_cast<Eigen::Index>(image.points2D.size()),
+              database.ReadKeypoints(id).rows() +
+                  static_cast<Eigen::Index>(num_ties.at(id)))
+        << image.name;
+  }
+  // Without tie points in the database, alsm is refused.
+  const testing::CommandResult refused = testing::RunBayon({"adjust",
+                                                            "--database_path",
+                                                            ws + "/database.db",
+                                                            "--input_path",
+                                                            dir + "/initial",
+                                                            "--output_path",
+                                                            dir + "/refused",
+                                                            "--tie_points",
+                                                            "alsm",
+                                                            "--log_path",
+                                                            dir + "/log"});
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_FALSE(fs::exists(dir + "/refused"));
 }
 
 // A COLMAP user's project: stock colmap mapper on the database, then bayon

@@ -36,6 +36,7 @@ int RunAdjust(int argc, char** argv) {
   std::string database_path, input_path, output_path, control_path, log_path;
   std::string datum = "auto", self_calibration = "significant";
   std::string camera_model = "brown_beyer", blunders = "robust";
+  std::string tie_points = "auto";
   bool overwrite = false;
   AdjustmentInputOptions input_options;
   AdjustmentOptions options;
@@ -85,6 +86,16 @@ int RunAdjust(int argc, char** argv) {
   app.add_option("--image_sigma_px",
                  input_options.image_sigma_px,
                  "A priori standard deviation of an image coordinate, px");
+  app.add_option("--tie_points",
+                 tie_points,
+                 "Tie observations: model (the model's tracks), alsm (bayon "
+                 "tiepoints' least-squares tie points), both; auto: both "
+                 "where the database has tie points, else model")
+      ->transform(CLI::IsMember({"auto", "alsm", "model", "both"}));
+  app.add_option("--min_tie_sigma_px",
+                 input_options.min_tie_sigma_px,
+                 "Tie points: floor of the least-squares standard deviations, "
+                 "px");
   app.add_option("--blunder_detection",
                  blunders,
                  "robust (Huber, then data snooping), snooping, or none")
@@ -116,6 +127,7 @@ int RunAdjust(int argc, char** argv) {
                               : datum == "minimum" ? DatumType::kMinimum
                               : datum == "free"    ? DatumType::kFree
                                                    : DatumType::kAuto;
+  input_options.tie_points = TiePointSourceFromName(tie_points);
   input_options.camera_model = camera_model == "colmap"
                                    ? CameraModelChoice::kColmap
                                    : CameraModelChoice::kBrownBeyer;

@@ -16,6 +16,7 @@ namespace bayon {
 int RunStripCommand(int argc, char** argv) {
   std::string database_path, output_path, control_path, log_path;
   std::string ring = "auto", datum = "auto", order = "auto";
+  std::string tie_points = "auto";
   bool overwrite = false;
   StripOptions options;
   CommandLine command(
@@ -65,6 +66,25 @@ int RunStripCommand(int argc, char** argv) {
   app.add_option("--image_sigma_px",
                  options.image_sigma_px,
                  "Precision of a keypoint, px");
+  app.add_option("--tie_points",
+                 tie_points,
+                 "Tie observations: model (the tracks of the verified "
+                 "matches), alsm (bayon tiepoints' least-squares tie points), "
+                 "both; auto: both where the database has tie points")
+      ->transform(CLI::IsMember({"auto", "alsm", "model", "both"}));
+  app.add_option("--min_tie_sigma_px",
+                 options.min_tie_sigma_px,
+                 "Tie points: floor of the least-squares standard deviations, "
+                 "px");
+  app.add_option("--resection",
+                 options.resection,
+                 "1: place images no model attaches by spatial resection");
+  app.add_option("--min_resection_points",
+                 options.min_resection_points,
+                 "Resection: intersected tie points needed (inliers)");
+  app.add_option("--resection_max_error_px",
+                 options.resection_max_error_px,
+                 "Resection: largest image error of an inlier, px");
   app.add_option("--max_reprojection_error_px",
                  options.max_reprojection_error_px,
                  "Strip adjustment: observations above this are removed");
@@ -75,6 +95,7 @@ int RunStripCommand(int argc, char** argv) {
       "--log_path", log_path, "Log file (default <workspace>/logs/strip.log)");
   if (!command.Parse(argc, argv)) return 0;
 
+  options.tie_points = TiePointSourceFromName(tie_points);
   options.ring = ring == "closed" ? RingClosure::kClosed
                  : ring == "open" ? RingClosure::kOpen
                                   : RingClosure::kAuto;
@@ -111,6 +132,12 @@ int RunStripCommand(int argc, char** argv) {
       " models, ",
       result.model.points3D.size(),
       " tie points",
+      result.resected_images.empty()
+          ? std::string()
+          : StrCat(" (", result.resected_images.size(), " images resected)"),
+      result.num_alsm_tie_points > 0
+          ? StrCat(", ", result.num_alsm_tie_points, " from bayon tiepoints")
+          : std::string(),
       result.closed_ring ? StrCat("; ring closure ",
                                   result.closure_rotation_deg,
                                   " deg, ",

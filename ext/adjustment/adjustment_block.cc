@@ -4,6 +4,9 @@
 #include "ext/adjustment/cost_functions.h"
 #include "ext/core/errors.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
 #include <limits>
 #include <map>
 
@@ -110,6 +113,16 @@ ceres::CostFunction* CreateReprojectionCost(
   }
 }
 
+Eigen::Matrix2d ObservationSqrtInformation(const BlockObservation& observation,
+                                           double sigma0_px) {
+  if (observation.covariance.isZero()) {
+    return Eigen::Matrix2d::Identity() * (sigma0_px / observation.sigma_px);
+  }
+  // C = L L^T, P = sigma0^2 C^-1 = W^T W with W = sigma0 L^-1.
+  const Eigen::Matrix2d L = observation.covariance.llt().matrixL();
+  return sigma0_px * L.inverse();
+}
+
 std::vector<ResidualTerm> BuildResidualTerms(AdjustmentBlock* block) {
   std::vector<ResidualTerm> terms;
   terms.reserve(block->observations.size() + block->distances.size());
@@ -120,7 +133,7 @@ std::vector<ResidualTerm> BuildResidualTerms(AdjustmentBlock* block) {
     BlockImage& image = block->images[observation.image_idx];
     BlockCamera& camera = block->cameras[image.camera_idx];
     const Eigen::Matrix2d sqrt_information =
-        Eigen::Matrix2d::Identity() * (block->sigma0_px / observation.sigma_px);
+        ObservationSqrtInformation(observation, block->sigma0_px);
     ResidualTerm term;
     term.type = TermType::kReprojection;
     term.index = static_cast<int>(o);
@@ -176,9 +189,11 @@ std::vector<Eigen::Vector2d> ImageResiduals(AdjustmentBlock* block) {
             term.parameters.data(), weighted.data(), nullptr)) {
       continue;
     }
-    const BlockObservation& observation = block->observations[term.index];
     residuals[term.index] =
-        weighted * (observation.sigma_px / block->sigma0_px);
+        ObservationSqrtInformation(block->observations[term.index],
+                                   block->sigma0_px)
+            .inverse() *
+        weighted;
   }
   return residuals;
 }

@@ -84,7 +84,11 @@ struct BlockObservation {
   // measurements of control and check points.
   point2D_t point2D_idx = kInvalidPoint2DIdx;
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();  // pixels
+  // Precision: a 2 x 2 covariance (pixels^2; least-squares matching gives
+  // one, elongated along weak texture), or where that is zero the same
+  // sigma_px in x and y. With a covariance, sigma_px = sqrt(trace / 2).
   double sigma_px = 1.0;
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
   // Rejected observations (data snooping) stay listed but inactive.
   bool active = true;
 };
@@ -129,6 +133,11 @@ struct ResidualTerm {
   std::vector<double*> parameters;
   int num_residuals() const { return cost->num_residuals(); }
 };
+
+// W with W^T W = P, the weight matrix of an observation relative to the
+// reference sigma0_px: the weighted residual is W (projected - observed).
+Eigen::Matrix2d ObservationSqrtInformation(const BlockObservation& observation,
+                                           double sigma0_px);
 
 // The reprojection cost for a camera model (BROWN_BEYER or any COLMAP model).
 // Throws InputError for a model without one.

@@ -1,16 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/adjustment/adjustment_input.h"
 
+#include "ext/adjustment/triangulation.h"
 #include "ext/colmap/bayon_tables.h"
 #include "ext/colmap/calibration_json.h"
 #include "ext/colmap/database.h"
 #include "ext/colmap/model_io.h"
+#include "ext/colmap/table_tie_points.h"
 #include "ext/core/camera_conversion.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 
+#include <Eigen/Eigenvalues>
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -21,10 +25,18 @@ namespace bayon {
 namespace {
 
 // Replaces each image's 2D points by the database's keypoints (same rows:
-// a COLMAP model's 2D points are its database's keypoints in order).
+// a COLMAP model's 2D points are its database's keypoints in order). A model
+// of bayon strip or adjust with tie points has each image's tie
+// observations after its keypoints, or (tie points alone) instead of them:
+// those 2D points are dropped with the track elements on them (the tie
+// points are read again from the database).
 void TakeKeypointsFromDatabase(const std::string& input_path,
+                               const std::map<image_t, size_t>& tie_counts,
                                Database* database,
                                Scene* scene) {
+  // Per image: the model's 2D points below this index are keypoints.
+  std::map<image_t, size_t> keypoint_limit;
+  bool dropped = false;
   for (auto& [image_id, image] : scene->images) {
     const std::optional<DatabaseImage> row =
         database->ReadImageWithName(image.name);
@@ -37,21 +49,148 @@ void TakeKeypointsFromDatabase(const std::string& input_path,
                       " (the model must come from this database)");
     }
     const FeatureKeypoints keypoints = database->ReadKeypoints(row->image_id);
-    if (static_cast<size_t>(keypoints.rows()) != image.points2D.size()) {
+    const size_t num_keypoints = static_cast<size_t>(keypoints.rows());
+    auto ties = tie_counts.find(row->image_id);
+    const size_t num_ties = ties == tie_counts.end() ? 0 : ties->second;
+    const size_t num_points = image.points2D.size();
+    if (num_points == num_keypoints) {
+      keypoint_limit[image_id] = num_keypoints;
+    } else if (num_ties > 0 && num_points == num_keypoints + num_ties) {
+      keypoint_limit[image_id] = num_keypoints;
+    } else if (num_ties > 0 && num_points == num_ties) {
+      keypoint_limit[image_id] = 0;
+    } else {
       ThrowInputError(input_path,
                       ": image '",
                       image.name,
                       "' has ",
-                      image.points2D.size(),
+                      num_points,
                       " 2D points, but the database has ",
                       keypoints.rows(),
-                      " keypoints for it (the model must come from this "
-                      "database)");
+                      " keypoints",
+                      num_ties > 0
+                          ? StrCat(" and ", num_ties, " tie observations")
+                          : std::string(),
+                      " for it (the model must come from this database)");
     }
-    for (size_t k = 0; k < image.points2D.size(); ++k) {
+    dropped |= keypoint_limit[image_id] < num_points;
+    image.points2D.resize(num_keypoints);
+    for (size_t k = 0; k < num_keypoints; ++k) {
       image.points2D[k].xy = KeypointXY(keypoints, static_cast<int>(k));
+      if (k >= keypoint_limit[image_id]) {
+        image.points2D[k].point3D_id = kInvalidPoint3DId;
+      }
     }
   }
+  if (!dropped) return;
+  OrderedMap<point3D_t, Point3D> kept;
+  for (auto& [point3D_id, point] : scene->points3D) {
+    std::vector<TrackElement>& track = point.track;
+    track.erase(std::remove_if(track.begin(),
+                               track.end(),
+                               [&](const TrackElement& element) {
+                                 return element.point2D_idx >=
+                                        keypoint_limit.at(element.image_id);
+                               }),
+                track.end());
+    if (track.size() >= 2) kept.Set(point3D_id, std::move(point));
+  }
+  scene->points3D = std::move(kept);
+  for (auto& [image_id, image] : scene->images) {
+    for (Point2D& point2D : image.points2D) {
+      point2D.point3D_id = kInvalidPoint3DId;
+    }
+  }
+  for (const auto& [point3D_id, point] : scene->points3D) {
+    for (const TrackElement& element : point.track) {
+      scene->images.at(element.image_id)
+          .points2D.at(element.point2D_idx)
+          .point3D_id = point3D_id;
+    }
+  }
+}
+
+using ObservationKey = std::pair<image_t, point2D_t>;
+
+// Adds bayon's tie points to the model, or replaces the model's tracks by
+// them (`replace`): the tie observations are appended to each image's 2D
+// points in point order, and every tie point observed in two or more of the
+// model's images is intersected from the model's orientations
+// (approximations; the adjustment refines them) as 3D point id = tie point
+// id (+ the largest model id when added). Returns the covariance of every
+// tie observation.
+std::map<ObservationKey, Eigen::Matrix2d> TakeTiePointsFromDatabase(
+    const std::string& input_path,
+    const std::vector<TiePointRecord>& tie_points,
+    bool replace,
+    Database* database,
+    double min_sigma_px,
+    Scene* scene) {
+  std::map<image_t, image_t> model_image_of;  // database id -> model id
+  for (auto& [image_id, image] : scene->images) {
+    const std::optional<DatabaseImage> row =
+        database->ReadImageWithName(image.name);
+    if (!row) {
+      ThrowInputError(input_path,
+                      ": image '",
+                      image.name,
+                      "' is not in the database ",
+                      database->path(),
+                      " (the model must come from this database)");
+    }
+    model_image_of[row->image_id] = image_id;
+    if (replace) image.points2D.clear();
+  }
+  point3D_t id_offset = 0;
+  if (replace) {
+    scene->points3D.clear();
+  } else {
+    for (const auto& [id, point] : scene->points3D) {
+      id_offset = std::max(id_offset, id);
+    }
+  }
+  std::map<ObservationKey, Eigen::Matrix2d> covariances;
+  for (const TiePointRecord& tie : tie_points) {
+    Point3D point;
+    std::vector<Ray> rays;
+    for (const TieObservation& observation : tie.observations) {
+      auto it = model_image_of.find(observation.image_id);
+      if (it == model_image_of.end()) continue;  // not in the model
+      Image& image = scene->images.at(it->second);
+      const point2D_t idx = static_cast<point2D_t>(image.points2D.size());
+      Point2D point2D;
+      point2D.xy = observation.xy;
+      image.points2D.push_back(point2D);
+      covariances[{it->second, idx}] =
+          FlooredCovariance(observation.covariance, min_sigma_px);
+      point.track.push_back({it->second, idx});
+      const std::optional<Ray> ray =
+          RayThroughPixel(scene->cameras.at(image.camera_id),
+                          image.cam_from_world,
+                          observation.xy);
+      if (ray) rays.push_back(*ray);
+    }
+    if (point.track.size() < 2) continue;
+    const std::optional<Eigen::Vector3d> xyz = IntersectRays(rays);
+    if (!xyz) continue;
+    point.xyz = *xyz;
+    point.color = Eigen::Matrix<uint8_t, 3, 1>(128, 128, 128);
+    const point3D_t id = id_offset + static_cast<point3D_t>(tie.point_id);
+    for (const TrackElement& element : point.track) {
+      scene->images.at(element.image_id)
+          .points2D.at(element.point2D_idx)
+          .point3D_id = id;
+    }
+    scene->points3D.Set(id, std::move(point));
+  }
+  if (covariances.empty() || scene->points3D.empty()) {
+    ThrowInputError(database->path(),
+                    ": no tie point of bayon_tie_points is seen in two or "
+                    "more images of the model ",
+                    input_path,
+                    " (run bayon tiepoints, or --tie_points model)");
+  }
+  return covariances;
 }
 
 std::map<camera_t, Camera> CalibrationsBesideModel(const std::string& path) {
@@ -66,11 +205,33 @@ std::map<camera_t, Camera> CalibrationsBesideModel(const std::string& path) {
 
 }  // namespace
 
+TiePointSource TiePointSourceFromName(const std::string& name) {
+  if (name == "auto") return TiePointSource::kAuto;
+  if (name == "model") return TiePointSource::kModel;
+  if (name == "alsm") return TiePointSource::kAlsm;
+  if (name == "both") return TiePointSource::kBoth;
+  ThrowInputError(
+      "--tie_points: '", name, "' is not auto, model, alsm or both");
+}
+
+Eigen::Matrix2d FlooredCovariance(const Eigen::Matrix2d& covariance,
+                                  double min_sigma) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
+  const Eigen::Vector2d values =
+      eigen.eigenvalues().cwiseMax(min_sigma * min_sigma);
+  return eigen.eigenvectors() * values.asDiagonal() *
+         eigen.eigenvectors().transpose();
+}
+
 void AdjustmentInputOptions::Check() const {
   CheckOption(image_sigma_px > 0,
               "AdjustmentInputOptions.image_sigma_px",
               "> 0",
               image_sigma_px);
+  CheckOption(min_tie_sigma_px > 0,
+              "AdjustmentInputOptions.min_tie_sigma_px",
+              "> 0",
+              min_tie_sigma_px);
   datum.Check();
 }
 
@@ -119,7 +280,40 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
   const ControlData control = ReadControlFolder(control_path);
 
   Database database(database_path, Database::Mode::kReadOnly);
-  TakeKeypointsFromDatabase(input_path, &database, &scene);
+  const std::vector<TiePointRecord> tie_points =
+      options.tie_points == TiePointSource::kModel
+          ? std::vector<TiePointRecord>()
+          : ReadTiePoints(&database);
+  if (options.tie_points == TiePointSource::kAlsm && tie_points.empty()) {
+    ThrowInputError(database_path,
+                    ": --tie_points alsm, but the database has no tie points "
+                    "(bayon_tie_points; run bayon tiepoints first)");
+  }
+  if (options.tie_points == TiePointSource::kBoth && tie_points.empty()) {
+    ThrowInputError(database_path,
+                    ": --tie_points both, but the database has no tie points "
+                    "(bayon_tie_points; run bayon tiepoints first)");
+  }
+  input.alsm_tie_points = !tie_points.empty();
+  const bool replace = options.tie_points == TiePointSource::kAlsm;
+  if (!replace) {
+    std::map<image_t, size_t> tie_counts;
+    for (const TiePointRecord& point : tie_points) {
+      for (const TieObservation& observation : point.observations) {
+        ++tie_counts[observation.image_id];
+      }
+    }
+    TakeKeypointsFromDatabase(input_path, tie_counts, &database, &scene);
+  }
+  std::map<ObservationKey, Eigen::Matrix2d> covariances;
+  if (input.alsm_tie_points) {
+    covariances = TakeTiePointsFromDatabase(input_path,
+                                            tie_points,
+                                            replace,
+                                            &database,
+                                            options.min_tie_sigma_px,
+                                            &scene);
+  }
   const std::map<camera_t, Camera> beside = CalibrationsBesideModel(input_path);
   std::map<camera_t, CalibrationRecord> calibrations;
   std::map<image_t, InteriorRecord> interiors;
@@ -184,6 +378,38 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
   }
 
   input.block = BlockFromScene(block_scene, options.image_sigma_px);
+  for (BlockObservation& observation : input.block.observations) {
+    auto it =
+        covariances.find({input.block.images[observation.image_idx].image_id,
+                          observation.point2D_idx});
+    if (it == covariances.end()) continue;
+    observation.covariance = it->second;
+    observation.sigma_px = std::sqrt(it->second.trace() / 2);
+  }
+  if (input.alsm_tie_points) {
+    // The reference precision: the median tie observation's, so that
+    // sigma0 a posteriori in pixels reads as the precision of a typical
+    // observation and the variance factor as how far the matching
+    // covariances are off.
+    std::vector<double> sigmas;
+    for (const BlockObservation& observation : input.block.observations) {
+      if (!observation.covariance.isZero()) {
+        sigmas.push_back(observation.sigma_px);
+      }
+    }
+    std::nth_element(
+        sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
+    input.block.sigma0_px = sigmas[sigmas.size() / 2];
+    input.notes.push_back(
+        StrCat(tie_points.size(),
+               " tie points from bayon_tie_points",
+               replace ? "" : " beside the model's tracks",
+               ", weighted by their least-squares covariance; a priori "
+               "sigma0 = the median tie observation's ",
+               input.block.sigma0_px,
+               " px"));
+    LOG(INFO) << input.notes.back();
+  }
   for (size_t c = 0; c < input.block.cameras.size(); ++c) {
     input.block.cameras[c].source_model =
         scene.cameras.at(input.block.cameras[c].camera.camera_id).model_id;

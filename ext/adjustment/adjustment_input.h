@@ -19,6 +19,8 @@
 #include "ext/adjustment/datum.h"
 #include "ext/core/scene.h"
 
+#include <Eigen/Core>
+
 #include <string>
 #include <vector>
 
@@ -26,11 +28,28 @@ namespace bayon {
 
 enum class CameraModelChoice { kBrownBeyer, kColmap };
 
+// The tie observations of the block: the input model's tracks (its 2D
+// points, which must be the database's keypoints; weighted with
+// image_sigma_px), the multi-image tie points of `bayon tiepoints`
+// (bayon_tie_points: least-squares matched, each observation weighted by its
+// covariance) intersected from the model's orientations, or both (the
+// tracks hold the block together where the tie points are sparse). kAuto is
+// kBoth where the database has tie points, else kModel.
+enum class TiePointSource { kAuto, kModel, kAlsm, kBoth };
+// "auto", "model", "alsm" or "both" (the commands' --tie_points).
+TiePointSource TiePointSourceFromName(const std::string& name);
+
 struct AdjustmentInputOptions {
   CameraModelChoice camera_model = CameraModelChoice::kBrownBeyer;
   // A priori standard deviation of an image coordinate of a tie point,
   // pixels: the reference sigma0 of the weights.
   double image_sigma_px = 1.0;
+  TiePointSource tie_points = TiePointSource::kAuto;
+  // Least-squares matching covariances are optimistic where the texture is
+  // very strong (a standard deviation of a few thousandths of a pixel says
+  // more about the patch than about the point); their eigenvalues are
+  // raised to this standard deviation, pixels.
+  double min_tie_sigma_px = 0.02;
   DatumOptions datum;
   void Check() const;
 };
@@ -43,7 +62,12 @@ struct CameraSource {
 };
 
 struct AdjustmentInput {
-  Scene scene;  // the input model, its 2D points replaced by the keypoints
+  // The input model, its 2D points replaced by the keypoints; tie
+  // observations are appended per image in point_id order (kAlsm: they are
+  // the only 2D points, in the order of the keypoints of tiepoints' COLMAP
+  // export, and 3D point ids are the tie point ids).
+  Scene scene;
+  bool alsm_tie_points = false;
   AdjustmentBlock block;
   DatumSetup datum;
   std::vector<CameraSource> cameras;
@@ -60,6 +84,11 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
                                     const std::string& input_path,
                                     const std::string& control_path,
                                     const AdjustmentInputOptions& options);
+
+// A least-squares covariance (pixels^2) with its eigenvalues raised to
+// min_sigma^2 (min_tie_sigma_px).
+Eigen::Matrix2d FlooredCovariance(const Eigen::Matrix2d& covariance,
+                                  double min_sigma);
 
 // Checks that a camera has a usable calibration (finite parameters, a
 // positive focal length); throws InputError naming `what` otherwise.

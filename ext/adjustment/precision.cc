@@ -278,6 +278,41 @@ class PrecisionComputer {
     }
   }
 
+  // The parameter that carries most of the eigenvector of the smallest
+  // eigenvalue of the (scaled) reduced normal matrix, named for the user.
+  std::string WeakestParameter(const Eigen::MatrixXd& scaled) const {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
+    if (eigen.info() != Eigen::Success) return "unknown";
+    Eigen::Index row = 0;
+    eigen.eigenvectors().col(0).cwiseAbs().maxCoeff(&row);
+    for (const ParamBlock& param : params_) {
+      if (param.eliminated || row < param.offset ||
+          row >= param.offset + param.size) {
+        continue;
+      }
+      const int k = static_cast<int>(row - param.offset);
+      switch (param.kind) {
+        case BlockKind::kRotation:
+          return StrCat(
+              "the rotation of image '", block_->images[param.owner].name, "'");
+        case BlockKind::kCenter:
+          return StrCat("coordinate ",
+                        "XYZ"[k],
+                        " of the projection centre of image '",
+                        block_->images[param.owner].name,
+                        "'");
+        case BlockKind::kIntrinsics:
+          return StrCat("parameter ",
+                        k,
+                        " of camera ",
+                        block_->cameras[param.owner].camera.camera_id);
+        case BlockKind::kPoint:
+          return StrCat("object point ", param.owner);
+      }
+    }
+    return "unknown";
+  }
+
   void InvertReducedSystem() {
     // Schur complement of the eliminated points.
     Eigen::MatrixXd S = N_kk_;
@@ -327,10 +362,12 @@ class PrecisionComputer {
       regular = ratio > 1e-7;
     }
     if (!regular) {
-      throw RunFailure(
+      throw RunFailure(StrCat(
           "the normal equations are singular: the datum is not defined or a "
           "parameter cannot be determined (check the control points, the "
-          "minimum datum, or the self-calibration parameters)");
+          "minimum datum, or the self-calibration parameters); the weakest "
+          "parameter: ",
+          WeakestParameter(scaled)));
     }
     Q_kk_ = scale.asDiagonal() *
             llt.solve(Eigen::MatrixXd::Identity(num_kept_, num_kept_)) *
@@ -672,8 +709,10 @@ class PrecisionComputer {
         const BlockObservation& observation = block_->observations[term.index];
         ObservationStatistics& stats = result_.observations[term.index];
         stats.valid = true;
-        const double to_px = observation.sigma_px / block_->sigma0_px;
-        stats.residual_px = jacobian.residual * to_px;
+        stats.residual_px =
+            ObservationSqrtInformation(observation, block_->sigma0_px)
+                .inverse() *
+            jacobian.residual;
         stats.redundancy = redundancy;
         for (int k = 0; k < 2; ++k) {
           const double denominator =

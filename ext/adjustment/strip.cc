@@ -5,9 +5,11 @@
 #include "ext/adjustment/adjustment_input.h"
 #include "ext/adjustment/bundle_solver.h"
 #include "ext/adjustment/precision.h"
+#include "ext/adjustment/resection.h"
 #include "ext/adjustment/triangulation.h"
 #include "ext/colmap/bayon_tables.h"
 #include "ext/colmap/database.h"
+#include "ext/colmap/table_tie_points.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
@@ -18,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <unordered_map>
@@ -28,7 +31,11 @@ namespace {
 struct StripImage {
   DatabaseImage row;
   int camera_idx = -1;
+  // The database's keypoints (none with tie points alone), then the tie
+  // observations in point order, with their covariances.
   FeatureKeypoints keypoints;
+  int num_keypoints = 0;
+  std::vector<Eigen::Matrix2d> tie_covariances;
   ImageFrame frame;
   bool placed = false;
   Rigid3d cam_from_world;
@@ -152,6 +159,7 @@ class StripBuilder {
       image.row = row;
       image.camera_idx = camera_idxs.at(row.camera_id);
       image.keypoints = database.ReadKeypoints(row.image_id);
+      image.num_keypoints = static_cast<int>(image.keypoints.rows());
       auto interior = interiors.find(row.image_id);
       image.frame = interior != interiors.end()
                         ? interior->second.frame
@@ -171,6 +179,57 @@ class StripBuilder {
       ThrowInputError(database_path_,
                       ": no verified image pairs (two_view_geometries); run "
                       "bayon match and bayon relative, or a COLMAP matcher");
+    }
+    std::vector<TiePointRecord> tie_points;
+    if (options_.tie_points != TiePointSource::kModel) {
+      tie_points = ReadTiePoints(&database);
+    }
+    if ((options_.tie_points == TiePointSource::kAlsm ||
+         options_.tie_points == TiePointSource::kBoth) &&
+        tie_points.empty()) {
+      ThrowInputError(database_path_,
+                      ": the database has no tie points (bayon_tie_points); "
+                      "run bayon tiepoints first, or --tie_points model");
+    }
+    use_matches_ = options_.tie_points != TiePointSource::kAlsm;
+    AppendTieObservations(tie_points);
+  }
+
+  // The tie observations after each image's keypoints, and their tracks.
+  void AppendTieObservations(const std::vector<TiePointRecord>& tie_points) {
+    std::vector<std::vector<Eigen::Vector2d>> xy(images_.size());
+    for (const TiePointRecord& point : tie_points) {
+      std::vector<std::pair<int, int>> track;
+      for (const TieObservation& observation : point.observations) {
+        auto it = image_idxs_.find(observation.image_id);
+        if (it == image_idxs_.end()) continue;
+        StripImage& image = images_[it->second];
+        const int first = use_matches_ ? image.num_keypoints : 0;
+        track.push_back(
+            {it->second, first + static_cast<int>(xy[it->second].size())});
+        xy[it->second].push_back(observation.xy);
+        image.tie_covariances.push_back(FlooredCovariance(
+            observation.covariance, options_.min_tie_sigma_px));
+      }
+      if (track.size() >= 2) tie_tracks_.push_back(std::move(track));
+    }
+    result_.num_alsm_tie_points = static_cast<int>(tie_tracks_.size());
+    for (size_t i = 0; i < images_.size(); ++i) {
+      StripImage& image = images_[i];
+      const int first = use_matches_ ? image.num_keypoints : 0;
+      FeatureKeypoints keypoints(
+          first + xy[i].size(),
+          std::max<Eigen::Index>(2, image.keypoints.cols()));
+      keypoints.setZero();
+      if (first > 0) keypoints.topRows(first) = image.keypoints;
+      for (size_t k = 0; k < xy[i].size(); ++k) {
+        keypoints(first + k, 0) = static_cast<float>(xy[i][k].x());
+        keypoints(first + k, 1) = static_cast<float>(xy[i][k].y());
+      }
+      if (!use_matches_) image.num_keypoints = 0;
+      image.keypoints = std::move(keypoints);
+      image.rays.assign(image.keypoints.rows(), std::nullopt);
+      image.ray_done.assign(image.keypoints.rows(), false);
     }
   }
 
@@ -206,6 +265,7 @@ class StripBuilder {
       return id;
     };
     for (const auto& [pair, geometry] : geometries_) {
+      if (!use_matches_) break;
       const FeatureMatches& matches = geometry.inlier_matches;
       for (Eigen::Index m = 0; m < matches.rows(); ++m) {
         sets.Union(element(pair.first, matches(m, 0)),
@@ -236,6 +296,9 @@ class StripBuilder {
       if (ok) consistent.push_back(std::move(track));
     }
     tracks_ = std::move(consistent);
+    // The tie points of `bayon tiepoints` are tracks of their own (one
+    // observation per image by construction).
+    for (const auto& track : tie_tracks_) tracks_.push_back(track);
     track_points_.assign(tracks_.size(), std::nullopt);
     track_at_.assign(images_.size(), {});
     for (size_t t = 0; t < tracks_.size(); ++t) {
@@ -265,7 +328,7 @@ class StripBuilder {
       *reason = "no relative orientation (qvec/tvec or E) for the pair";
       return std::nullopt;
     }
-    return DecomposeEssential(a, b, E, geometry.inlier_matches, reason);
+    return DecomposeEssential(a, b, E, reason);
   }
 
   // E = [t]x R: the four (R, t) of the SVD, the one with most intersections
@@ -273,8 +336,8 @@ class StripBuilder {
   std::optional<Rigid3d> DecomposeEssential(int a,
                                             int b,
                                             const Eigen::Matrix3d& E,
-                                            const FeatureMatches& matches,
                                             std::string* reason) {
+    const std::vector<std::pair<int, int>> shared = SharedObservations(a, b);
     Eigen::JacobiSVD<Eigen::Matrix3d> svd(
         E, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
@@ -291,9 +354,9 @@ class StripBuilder {
       for (double sign : {1.0, -1.0}) {
         const Rigid3d candidate(Eigen::Quaterniond(R).normalized(), sign * t);
         int count = 0;
-        for (Eigen::Index m = 0; m < matches.rows(); ++m) {
-          count += ModelPoint(a, matches(m, 0), b, matches(m, 1), candidate)
-                       .has_value();
+        for (const auto& [keypoint_a, keypoint_b] : shared) {
+          count +=
+              ModelPoint(a, keypoint_a, b, keypoint_b, candidate).has_value();
         }
         if (count > best_count) {
           best_count = count;
@@ -327,18 +390,27 @@ class StripBuilder {
     std::vector<Eigen::Vector3d> xyz;  // camera a's frame, base 1
   };
 
+  // The observations (keypoint in a, keypoint in b) of the tracks the two
+  // images share.
+  std::vector<std::pair<int, int>> SharedObservations(int a, int b) const {
+    std::vector<std::pair<int, int>> shared;
+    for (const auto& [keypoint_a, track] : track_at_[a]) {
+      auto it = track_at_[b].end();
+      for (const auto& [image_idx, keypoint] : tracks_[track]) {
+        if (image_idx == b) it = track_at_[b].find(keypoint);
+      }
+      if (it != track_at_[b].end()) shared.push_back({keypoint_a, it->first});
+    }
+    return shared;
+  }
+
   ModelPoints IntersectModel(int a, int b, const Rigid3d& b_from_a) {
     ModelPoints points;
-    for (const auto& [keypoint_a, track] : track_at_[a]) {
-      auto it = std::find_if(
-          tracks_[track].begin(),
-          tracks_[track].end(),
-          [b](const std::pair<int, int>& e) { return e.first == b; });
-      if (it == tracks_[track].end()) continue;
+    for (const auto& [keypoint_a, keypoint_b] : SharedObservations(a, b)) {
       const std::optional<Eigen::Vector3d> xyz =
-          ModelPoint(a, keypoint_a, b, it->second, b_from_a);
+          ModelPoint(a, keypoint_a, b, keypoint_b, b_from_a);
       if (!xyz) continue;
-      points.tracks.push_back(track);
+      points.tracks.push_back(track_at_[a].at(keypoint_a));
       points.xyz.push_back(*xyz);
     }
     return points;
@@ -495,6 +567,71 @@ class StripBuilder {
     return IntersectRays(rays, options_.min_intersection_angle_deg);
   }
 
+  // Spatial resection of image b from the tie points intersected so far,
+  // the nearest placed station (in name order) as one approximation.
+  bool Resect(int b) {
+    std::vector<Eigen::Vector2d> xy;
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& [keypoint, track] : track_at_[b]) {
+      if (!track_points_[track]) continue;
+      const Eigen::Vector3d* ray = Ray(b, keypoint);
+      if (ray == nullptr) continue;
+      xy.push_back(ray->hnormalized());
+      points.push_back(*track_points_[track]);
+    }
+    const double focal = cameras_[images_[b].camera_idx].MeanFocalLengthPx();
+    ResectionOptions resection;
+    resection.max_error = options_.resection_max_error_px / focal;
+    resection.min_inliers = options_.min_resection_points;
+    resection.seed = static_cast<uint64_t>(b) + 1;
+    const Rigid3d* guess = nullptr;
+    int nearest = std::numeric_limits<int>::max();
+    for (size_t i = 0; i < images_.size(); ++i) {
+      const int distance = std::abs(static_cast<int>(i) - b);
+      if (images_[i].placed && distance < nearest) {
+        nearest = distance;
+        guess = &images_[i].cam_from_world;
+      }
+    }
+    const std::optional<Resection> result =
+        ResectImage(xy, points, guess, resection);
+    if (!result) return false;
+    images_[b].cam_from_world = result->cam_from_world;
+    images_[b].placed = true;
+    sequence_.push_back(b);
+    result_.resected_images.push_back({images_[b].row.name,
+                                       result->num_inliers,
+                                       static_cast<int>(xy.size()),
+                                       result->rms_error * focal});
+    LOG(INFO) << "strip: " << images_[b].row.name << " placed by resection ("
+              << result->num_inliers << " of " << xy.size()
+              << " tie points, RMS " << result->rms_error * focal << " px)";
+    IntersectTracksOf(b);
+    return true;
+  }
+
+  // Resects the unplaced image that sees the most intersected tie points
+  // (trying the others in turn); false when none can be placed.
+  bool ResectBest() {
+    if (!options_.resection) return false;
+    std::vector<std::pair<int, int>> candidates;  // (-count, image)
+    for (size_t i = 0; i < images_.size(); ++i) {
+      if (images_[i].placed) continue;
+      int count = 0;
+      for (const auto& [keypoint, track] : track_at_[i]) {
+        count += track_points_[track].has_value();
+      }
+      if (count >= options_.min_resection_points) {
+        candidates.push_back({-count, static_cast<int>(i)});
+      }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    for (const auto& [count, image_idx] : candidates) {
+      if (Resect(image_idx)) return true;
+    }
+    return false;
+  }
+
   // The images in the order of their names form the strip when every
   // neighbour in that order is related to the next (or to one within the
   // gap that bridges a missing model).
@@ -518,6 +655,8 @@ class StripBuilder {
     result_.order = by_name ? "name" : "graph";
     if (by_name) {
       ChainInNameOrder();
+      // Images placed out of sequence now: no ring closure along the names.
+      while (ResectBest()) sequential_ = false;
     } else {
       ChainByGraph();
     }
@@ -548,6 +687,7 @@ class StripBuilder {
         if (a < 0 || !images_[a].placed) continue;
         connected = Connect(a, static_cast<int>(b), false);
       }
+      if (!connected && options_.resection) connected = Resect(b);
       if (!connected) {
         LOG(WARNING) << "strip: " << images_[b].row.name
                      << " could not be connected: "
@@ -596,8 +736,11 @@ class StripBuilder {
           }
         }
       }
-      if (best_a < 0 || best_common < options_.min_common_points) break;
-      Connect(best_a, best_b, false);
+      if (best_a >= 0 && best_common >= options_.min_common_points &&
+          Connect(best_a, best_b, false)) {
+        continue;
+      }
+      if (!ResectBest()) break;
     }
   }
 
@@ -742,6 +885,12 @@ class StripBuilder {
         observation.point2D_idx = keypoint;
         observation.xy = KeypointXY(images_[image_idx].keypoints, keypoint);
         observation.sigma_px = options_.image_sigma_px;
+        const StripImage& image = images_[image_idx];
+        if (keypoint >= image.num_keypoints) {
+          observation.covariance =
+              image.tie_covariances[keypoint - image.num_keypoints];
+          observation.sigma_px = std::sqrt(observation.covariance.trace() / 2);
+        }
         block_.observations.push_back(observation);
         ++count;
       }
@@ -884,6 +1033,8 @@ class StripBuilder {
   std::map<image_t, int> image_idxs_;
   std::map<std::pair<int, int>, TwoViewGeometry> geometries_;
   std::vector<std::vector<std::pair<int, int>>> tracks_;
+  std::vector<std::vector<std::pair<int, int>>> tie_tracks_;  // bayon's
+  bool use_matches_ = true;  // tracks of the verified matches as well
   std::vector<std::optional<Eigen::Vector3d>> track_points_;
   std::vector<std::unordered_map<int, int>> track_at_;  // keypoint -> track
   std::vector<int> sequence_;  // placed images in the order of placing
@@ -910,6 +1061,18 @@ void StripOptions::Check() const {
               max_reprojection_error_px);
   CheckOption(
       image_sigma_px > 0, "StripOptions.image_sigma_px", "> 0", image_sigma_px);
+  CheckOption(min_tie_sigma_px > 0,
+              "StripOptions.min_tie_sigma_px",
+              "> 0",
+              min_tie_sigma_px);
+  CheckOption(min_resection_points >= 6,
+              "StripOptions.min_resection_points",
+              ">= 6",
+              min_resection_points);
+  CheckOption(resection_max_error_px > 0,
+              "StripOptions.resection_max_error_px",
+              "> 0",
+              resection_max_error_px);
   datum.Check();
 }
 
@@ -929,6 +1092,15 @@ std::string StripReportJson(const StripResult& result) {
   root["num_points"] = result.model.points3D.size();
   root["num_tracks"] = result.num_tracks;
   root["order"] = result.order;
+  root["num_alsm_tie_points"] = result.num_alsm_tie_points;
+  Json resected = Json::array();
+  for (const auto& image : result.resected_images) {
+    resected.push_back({{"name", image.name},
+                        {"num_inliers", image.num_inliers},
+                        {"num_points", image.num_points},
+                        {"rms_px", image.rms_px}});
+  }
+  root["resected_images"] = resected;
   root["unoriented_images"] = result.unoriented_images;
   Json models = Json::array();
   for (const StripModel& m : result.models) {

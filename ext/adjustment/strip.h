@@ -16,7 +16,13 @@
 //     Bayon tower) gives the closure error, which is distributed along the
 //     strip: rotations in proportion to the image's place in the sequence,
 //     positions in proportion to the path length;
-//  3. the tie points (tracks of the verified matches over all pairs) are
+//     An image that no model attaches (its relative orientations missing
+//     or without common points) is placed by spatial resection from the tie
+//     points already intersected (resection.h), as long as it sees enough
+//     of them;
+//  3. the tie points (tracks of the verified matches over all pairs, and
+//     the multi-image tie points of `bayon tiepoints` where the database
+//     has them, weighted by their least-squares covariance) are
 //     intersected from all their rays, and the whole strip is adjusted in
 //     model coordinates (bundle solution with the interior orientation held,
 //     robust first, then observations above a residual limit removed);
@@ -26,9 +32,13 @@
 //     datum.h), and its residuals are reported.
 //
 // The result is a COLMAP model whose 2D points are the database keypoints,
-// so that `bayon adjust` and COLMAP's tools take it as it is.
+// so that `bayon adjust` and COLMAP's tools take it as it is; with tie
+// points, each image's tie observations follow its keypoints (in point
+// order; alone with tie_points kAlsm, in the order of tiepoints' COLMAP
+// export).
 #pragma once
 
+#include "ext/adjustment/adjustment_input.h"
 #include "ext/adjustment/datum.h"
 #include "ext/core/scene.h"
 
@@ -62,6 +72,16 @@ struct StripOptions {
   bool adjust = true;
   // Precision of a keypoint (weights of the strip adjustment), pixels.
   double image_sigma_px = 1.0;
+  // Which tie observations (adjustment_input.h; kAuto: both where the
+  // database has bayon tie points, else the matches' tracks) and the floor
+  // of their least-squares standard deviations.
+  TiePointSource tie_points = TiePointSource::kAuto;
+  double min_tie_sigma_px = 0.02;
+  // Spatial resection of images no model attaches: at least this many
+  // intersected tie points within resection_max_error_px.
+  bool resection = true;
+  int min_resection_points = 8;
+  double resection_max_error_px = 2.0;
   // Datum of the object system: kAuto is control with three or more control
   // points, the minimum datum with a vertical bar, otherwise an error when
   // control is given (kFree keeps model coordinates).
@@ -85,8 +105,17 @@ struct StripModel {
 struct StripResult {
   Scene model;  // COLMAP cameras, all keypoints as 2D points
   std::vector<StripModel> models;
+  // Images placed by spatial resection: name, inliers, points, RMS (px).
+  struct ResectedImage {
+    std::string name;
+    int num_inliers = 0;
+    int num_points = 0;
+    double rms_px = 0;
+  };
+  std::vector<ResectedImage> resected_images;
   std::vector<std::string> unoriented_images;
-  std::string order;  // "name" or "graph"
+  int num_alsm_tie_points = 0;  // bayon tie points among the tracks
+  std::string order;            // "name" or "graph"
   int num_tracks = 0;
   bool closed_ring = false;
   // The ring's closure error before distribution: rotation, and position as

@@ -3,6 +3,7 @@
 
 #include "ext/colmap/database.h"
 #include "ext/colmap/model_io.h"
+#include "ext/colmap/table_tie_points.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/eval/sparse_eval.h"
@@ -178,6 +179,84 @@ TEST(Strip, ImagesOutOfOrderFollowTheViewGraph) {
       EvaluateSparse(result.model, ws.truth.scene);
   EXPECT_LT(evaluation.center_rms_relative, 0.005);
   EXPECT_LT(evaluation.rotation_rms_deg, 0.1);
+}
+
+// bayon tiepoints' multi-image points carry the strip across an image that
+// has no relative orientation: it is placed by spatial resection, and its
+// tie observations follow the keypoints in the model.
+TEST(Strip, ImageWithoutRelativeOrientationIsResectedFromTiePoints) {
+  const Workspace ws = MakeWorkspace("strip_resection");
+  const std::string db = ws.path + "/database.db";
+  image_t lost = kInvalidImageId;
+  size_t num_tie_observations = 0;
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    std::vector<DatabaseImage> rows = database.ReadAllImages();
+    std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+      return a.name < b.name;
+    });
+    lost = rows[6].image_id;
+    auto transaction = database.BeginTransaction();
+    for (const auto& [pair_id, geometry] :
+         database.ReadAllTwoViewGeometries()) {
+      const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+      if (id1 == lost || id2 == lost) database.DeleteTwoViewGeometry(id1, id2);
+    }
+    // The synthetic observations (0.3 px noise) of every point seen in three
+    // or more images, as least-squares tie points with that precision.
+    std::vector<TiePointRecord> points;
+    for (const auto& [id, point] : ws.truth.noisy_scene.points3D) {
+      if (point.track.size() < 3) continue;
+      TiePointRecord record;
+      record.source = "alsm";
+      for (const TrackElement& element : point.track) {
+        TieObservation observation;
+        observation.image_id = element.image_id;
+        observation.xy = ws.truth.noisy_scene.images.at(element.image_id)
+                             .points2D.at(element.point2D_idx)
+                             .xy;
+        observation.covariance = 0.09 * Eigen::Matrix2d::Identity();
+        record.observations.push_back(observation);
+      }
+      std::sort(
+          record.observations.begin(),
+          record.observations.end(),
+          [](const auto& a, const auto& b) { return a.image_id < b.image_id; });
+      num_tie_observations += record.observations.size();
+      points.push_back(std::move(record));
+    }
+    WriteTiePoints(&database, points);
+    transaction.Commit();
+  }
+  StripOptions options;
+  options.num_threads = 1;
+  options.ring = RingClosure::kOpen;
+  const StripResult result = RunStrip(db, "", options);
+  EXPECT_EQ(result.model.images.size(), 16u);
+  ASSERT_EQ(result.resected_images.size(), 1u);
+  EXPECT_GT(result.resected_images[0].num_inliers, 50);
+  EXPECT_LT(result.resected_images[0].rms_px, 1.0);
+  EXPECT_GT(result.num_alsm_tie_points, 100);
+  const SparseEvaluation evaluation =
+      EvaluateSparse(result.model, ws.truth.scene);
+  EXPECT_EQ(evaluation.num_registered, 16);
+  EXPECT_LT(evaluation.center_rms_relative, 0.005);
+  EXPECT_LT(evaluation.rotation_rms_deg, 0.1);
+  // Keypoints first, then the tie observations.
+  Database database(db, Database::Mode::kReadOnly);
+  size_t num_extra = 0;
+  for (const auto& [id, image] : result.model.images) {
+    const Eigen::Index keypoints = database.ReadKeypoints(id).rows();
+    ASSERT_GE(static_cast<Eigen::Index>(image.points2D.size()), keypoints);
+    num_extra += image.points2D.size() - keypoints;
+  }
+  EXPECT_EQ(num_extra, num_tie_observations);
+  result.model.CheckConsistency("strip");
+
+  // Without the tie points the image stays out.
+  options.tie_points = TiePointSource::kModel;
+  const StripResult without = RunStrip(db, "", options);
+  EXPECT_EQ(without.model.images.size(), 15u);
 }
 
 TEST(Strip, MinimumDatumFromTheLevellingBar) {
