@@ -96,6 +96,11 @@ int RunAdjust(int argc, char** argv) {
                  input_options.min_tie_sigma_px,
                  "Tie points: floor of the least-squares standard deviations, "
                  "px");
+  app.add_option("--variance_components",
+                 options.variance_components,
+                 "1: estimate the precision of each observation group "
+                 "(keypoint tracks, tie points, manual measurements) by "
+                 "variance component estimation before data snooping");
   app.add_option("--blunder_detection",
                  blunders,
                  "robust (Huber, then data snooping), snooping, or none")

@@ -112,6 +112,7 @@ class Adjuster {
       SetCameraParametersFree(true);
       Solve("step 2: with self-calibration", robust);
     }
+    if (options_.variance_components) EstimateVarianceComponents(robust);
     if (robust) RejectAfterRobustSolution();
     if (options_.blunder_detection != BlunderDetection::kNone) {
       Snoop();
@@ -217,6 +218,105 @@ class Adjuster {
     Solve("data snooping: last solution", false);
     LOG(WARNING) << "data snooping stopped after "
                  << options_.max_snooping_iterations << " iterations";
+  }
+
+  // The group of an image observation (VarianceComponent).
+  int GroupOf(const BlockObservation& observation) const {
+    if (!observation.covariance.isZero()) return 1;
+    if (observation.point2D_idx == kInvalidPoint2DIdx) return 2;
+    return 0;
+  }
+
+  // Each group's variance factor: with the robust solution (blunders still
+  // in, down-weighted) from the median of its normalised residuals, else
+  // v'Pv / r from the redundancy numbers; iterated until no group's variance
+  // changes by more than 5 %.
+  void EstimateVarianceComponents(bool robust) {
+    static const char* kNames[3] = {
+        "keypoint tracks", "least-squares tie points", "manual measurements"};
+    std::vector<VarianceComponent> groups(3);
+    for (int g = 0; g < 3; ++g) groups[g].name = kNames[g];
+    PrecisionOptions precision_options;
+    precision_options.compute_residual_cofactors = true;
+    for (int iteration = 1; iteration <= options_.max_component_iterations;
+         ++iteration) {
+      if (iteration > 1) {
+        Solve(StrCat("variance components ", iteration), robust);
+      }
+      AdjustmentPrecision precision;
+      try {
+        precision = ComputePrecision(block_, precision_options);
+      } catch (const RunFailure& failure) {
+        LOG(WARNING) << "variance components: " << failure.what();
+        return;
+      }
+      std::vector<std::vector<double>> abs_w(3);
+      std::vector<double> vpv(3, 0.0), r(3, 0.0);
+      std::vector<int> count(3, 0);
+      for (size_t o = 0; o < block_->observations.size(); ++o) {
+        const ObservationStatistics& stats = precision.observations[o];
+        if (!stats.valid) continue;
+        const int g = GroupOf(block_->observations[o]);
+        ++count[g];
+        for (int k = 0; k < 2; ++k) {
+          // normalized = whitened / (sigma0 sqrt(r)).
+          const double whitened =
+              stats.normalized(k) * precision.sigma0 *
+              std::sqrt(std::max(stats.redundancy(k), 1e-12));
+          vpv[g] += whitened * whitened;
+          r[g] += stats.redundancy(k);
+          abs_w[g].push_back(std::abs(stats.normalized(k)));
+        }
+      }
+      std::vector<int> estimable;
+      for (int g = 0; g < 3; ++g) {
+        groups[g].num_observations = count[g];
+        groups[g].redundancy = r[g];
+        if (r[g] >= options_.min_component_redundancy) estimable.push_back(g);
+      }
+      if (estimable.size() < 2) return;  // one group: sigma0 says it all
+      // Variance factors relative to the reference sigma0 a priori.
+      const double reference = block_->sigma0_px * block_->sigma0_px;
+      double largest_change = 0;
+      std::vector<double> factor(3, 1.0);
+      for (int g : estimable) {
+        if (robust) {
+          std::vector<double>& w = abs_w[g];
+          std::nth_element(w.begin(), w.begin() + w.size() / 2, w.end());
+          const double scale = 1.4826 * w[w.size() / 2] * precision.sigma0;
+          factor[g] = scale * scale / reference;
+        } else {
+          factor[g] = vpv[g] / r[g] / reference;
+        }
+        if (!(factor[g] > 0) || !std::isfinite(factor[g])) return;
+        largest_change =
+            std::max(largest_change, std::abs(std::log(factor[g])));
+      }
+      LOG(INFO) << "variance components " << iteration << ": "
+                << kNames[estimable[0]] << " x" << factor[estimable[0]] << ", "
+                << kNames[estimable[1]] << " x" << factor[estimable[1]];
+      for (BlockObservation& observation : block_->observations) {
+        const double f = factor[GroupOf(observation)];
+        observation.covariance *= f;
+        observation.sigma_px *= std::sqrt(f);
+      }
+      result_.variance_components.clear();
+      for (int g : estimable) {
+        groups[g].variance_scale *= factor[g];
+        std::vector<double> sigmas;
+        for (const BlockObservation& observation : block_->observations) {
+          if (observation.active && GroupOf(observation) == g) {
+            sigmas.push_back(observation.sigma_px);
+          }
+        }
+        std::nth_element(
+            sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
+        groups[g].median_sigma_px = sigmas[sigmas.size() / 2];
+        result_.variance_components.push_back(groups[g]);
+      }
+      if (largest_change < std::log(1.05)) break;
+    }
+    Solve("variance components: solution", robust);
   }
 
   // The robust solution has down-weighted the blunders, so that the good

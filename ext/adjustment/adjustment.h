@@ -62,6 +62,15 @@ struct AdjustmentOptions {
   int max_snooping_iterations = 30;
   // Huber scale for the robust step, in reference standard deviations.
   double robust_loss_scale = 2.0;
+  // Variance component estimation (Foerstner 1979) where the image
+  // observations come in groups of different precision (keypoint tracks,
+  // least-squares tie points, manual measurements): each group's a priori
+  // variances are scaled by its variance factor v'Pv / r (from the
+  // redundancy numbers), iterated, before data snooping. Groups with less
+  // redundancy than min_component_redundancy keep their weights.
+  bool variance_components = true;
+  int max_component_iterations = 4;
+  double min_component_redundancy = 30;
   BundleSolverOptions solver;
   void Check() const;
 };
@@ -98,6 +107,18 @@ struct RejectedObservation {
   int iteration = 0;  // 0: after the robust solution, 1...: data snooping
 };
 
+// One group of image observations and its estimated precision.
+struct VarianceComponent {
+  std::string name;
+  int num_observations = 0;  // image points
+  double redundancy = 0;     // sum of the redundancy numbers
+  // Scale applied to the group's a priori variances (product over the
+  // iterations), and the resulting median standard deviation of a
+  // coordinate, pixels.
+  double variance_scale = 1;
+  double median_sigma_px = 0;
+};
+
 struct CorrelationFlag {
   int camera_idx = -1;
   std::string name1;
@@ -118,6 +139,8 @@ struct AdjustmentResult {
   // Data snooping.
   std::vector<RejectedObservation> rejected;
   int num_snooping_iterations = 0;
+  // Variance components (empty where there is one group).
+  std::vector<VarianceComponent> variance_components;
   int num_points_removed = 0;  // tie points left with fewer than 2 rays
   // Final statistics.
   AdjustmentPrecision precision;

@@ -226,6 +226,17 @@ class ReportBuilder {
     const double pitch = MeanPitchMm();
     if (pitch > 0) json["sigma0_image_um"] = p.sigma0 * pitch * 1000.0;
     json["variance_factor"] = p.sigma0 / block_.sigma0_px;
+    if (!result_.variance_components.empty()) {
+      Json components = Json::array();
+      for (const VarianceComponent& c : result_.variance_components) {
+        components.push_back({{"group", c.name},
+                              {"num_observations", c.num_observations},
+                              {"redundancy", c.redundancy},
+                              {"variance_scale", c.variance_scale},
+                              {"median_sigma_px", c.median_sigma_px}});
+      }
+      json["variance_components"] = components;
+    }
     // Image residuals.
     Eigen::Vector2d sum_sq = Eigen::Vector2d::Zero();
     double max_residual = 0, sum_redundancy = 0, min_redundancy = 1;
@@ -599,6 +610,17 @@ std::string Printout(const Json& r) {
     out += Printf(" = %.2f micron", s["sigma0_image_um"].get<double>());
   }
   out += "\n";
+  if (s.contains("variance_components")) {
+    out += "   variance components (a priori variances scaled per group):\n";
+    for (const Json& c : s["variance_components"]) {
+      out += Printf("     %-26s %7d points  r = %9.1f  x %8.4f  -> %.4f px\n",
+                    c["group"].get<std::string>().c_str(),
+                    c["num_observations"].get<int>(),
+                    c["redundancy"].get<double>(),
+                    c["variance_scale"].get<double>(),
+                    c["median_sigma_px"].get<double>());
+    }
+  }
   if (s.contains("residual_rms_px")) {
     out += Printf(
         "   RMS of image residuals x, y              %8.4f %8.4f "

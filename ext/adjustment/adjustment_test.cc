@@ -251,5 +251,43 @@ TEST(Adjustment, ObservationsAreWeightedByTheirCovariance) {
   EXPECT_GE(num_within, 0.97 * num_coordinates);
 }
 
+// Two groups whose a priori precisions are both wrong (tie points said to be
+// 0.05 px, really 0.1 px; keypoints said to be 1 px, really 0.3 px):
+// variance component estimation finds each group's own precision.
+TEST(Adjustment, VarianceComponentsFindEachGroupsPrecision) {
+  TestBlock test = MakeBlock(31, true, 0.0);
+  AdjustmentBlock& block = test.block;
+  block.cameras[0].camera = test.truth.scene.cameras.at(1);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0, 1);
+  for (size_t o = 0; o < block.observations.size(); ++o) {
+    BlockObservation& observation = block.observations[o];
+    const bool tie = o % 2 == 0;
+    const double sigma = tie ? 0.1 : 0.3;
+    observation.xy += sigma * Eigen::Vector2d(normal(rng), normal(rng));
+    if (tie) {
+      observation.covariance = 0.0025 * Eigen::Matrix2d::Identity();
+      observation.sigma_px = 0.05;
+    } else {
+      observation.sigma_px = 1.0;
+    }
+  }
+  block.sigma0_px = 0.05;
+  AdjustmentOptions options;
+  options.self_calibration = SelfCalibration::kNone;
+  options.solver.num_threads = 1;
+  const AdjustmentResult result = RunAdjustment(options, &block);
+  ASSERT_EQ(result.variance_components.size(), 2u);
+  for (const VarianceComponent& component : result.variance_components) {
+    const double truth =
+        component.name == "least-squares tie points" ? 0.1 : 0.3;
+    EXPECT_NEAR(component.median_sigma_px, truth, 0.1 * truth)
+        << component.name;
+  }
+  EXPECT_NEAR(result.precision.sigma0 / block.sigma0_px, 1.0, 0.1);
+  // Good observations stay: at most 0.5 % rejected.
+  EXPECT_LE(result.rejected.size(), 0.005 * block.observations.size());
+}
+
 }  // namespace
 }  // namespace bayon
