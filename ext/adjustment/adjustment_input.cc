@@ -24,6 +24,22 @@ namespace fs = std::filesystem;
 namespace bayon {
 namespace {
 
+// The database row of a model image (by name).
+DatabaseImage DatabaseRowOf(const std::string& input_path,
+                            Database* database,
+                            const Image& image) {
+  std::optional<DatabaseImage> row = database->ReadImageWithName(image.name);
+  if (!row) {
+    ThrowInputError(input_path,
+                    ": image '",
+                    image.name,
+                    "' is not in the database ",
+                    database->path(),
+                    " (the model must come from this database)");
+  }
+  return *row;
+}
+
 // Replaces each image's 2D points by the database's keypoints (same rows:
 // a COLMAP model's 2D points are its database's keypoints in order). A model
 // of bayon strip or adjust with tie points has each image's tie
@@ -38,19 +54,10 @@ void TakeKeypointsFromDatabase(const std::string& input_path,
   std::map<image_t, size_t> keypoint_limit;
   bool dropped = false;
   for (auto& [image_id, image] : scene->images) {
-    const std::optional<DatabaseImage> row =
-        database->ReadImageWithName(image.name);
-    if (!row) {
-      ThrowInputError(input_path,
-                      ": image '",
-                      image.name,
-                      "' is not in the database ",
-                      database->path(),
-                      " (the model must come from this database)");
-    }
-    const FeatureKeypoints keypoints = database->ReadKeypoints(row->image_id);
+    const DatabaseImage row = DatabaseRowOf(input_path, database, image);
+    const FeatureKeypoints keypoints = database->ReadKeypoints(row.image_id);
     const size_t num_keypoints = static_cast<size_t>(keypoints.rows());
-    auto ties = tie_counts.find(row->image_id);
+    auto ties = tie_counts.find(row.image_id);
     const size_t num_ties = ties == tie_counts.end() ? 0 : ties->second;
     const size_t num_points = image.points2D.size();
     if (num_points == num_keypoints) {
@@ -128,17 +135,8 @@ std::map<ObservationKey, Eigen::Matrix2d> TakeTiePointsFromDatabase(
     Scene* scene) {
   std::map<image_t, image_t> model_image_of;  // database id -> model id
   for (auto& [image_id, image] : scene->images) {
-    const std::optional<DatabaseImage> row =
-        database->ReadImageWithName(image.name);
-    if (!row) {
-      ThrowInputError(input_path,
-                      ": image '",
-                      image.name,
-                      "' is not in the database ",
-                      database->path(),
-                      " (the model must come from this database)");
-    }
-    model_image_of[row->image_id] = image_id;
+    const DatabaseImage row = DatabaseRowOf(input_path, database, image);
+    model_image_of[row.image_id] = image_id;
     if (replace) image.points2D.clear();
   }
   point3D_t id_offset = 0;
