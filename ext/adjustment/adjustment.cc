@@ -110,6 +110,9 @@ class Adjuster {
     }
     if (self_calibrate) {
       SetCameraParametersFree(true);
+      if (options_.self_calibration == SelfCalibration::kSignificant) {
+        RemoveUndeterminableParameters();
+      }
       Solve("step 2: with self-calibration", robust);
     }
     if (options_.variance_components) EstimateVarianceComponents(robust);
@@ -367,6 +370,52 @@ class Adjuster {
   }
 
   // Stepwise removal of the least significant additional parameter.
+  // Before the parameters are estimated: at the stable block of step 1 the
+  // normal equations with every candidate free show which ones the
+  // exterior orientations could imitate (correlation above
+  // max_exterior_correlation); those are removed one at a time, the most
+  // correlated first, so that step 2 does not wander off with them.
+  void RemoveUndeterminableParameters() {
+    PrecisionOptions precision_options;
+    precision_options.compute_residual_cofactors = false;
+    while (true) {
+      AdjustmentPrecision precision;
+      try {
+        precision = ComputePrecision(block_, precision_options);
+      } catch (const RunFailure&) {
+        return;  // step 2 and the statistics will say which one
+      }
+      ParameterEstimate imitated;
+      for (size_t c = 0; c < block_->cameras.size(); ++c) {
+        const BlockCamera& camera = block_->cameras[c];
+        const std::vector<std::string> names =
+            ParameterNames(camera.camera.model_id);
+        for (int idx : candidates_[c]) {
+          if (!camera.free[idx]) continue;
+          const ParameterEstimate estimate =
+              Estimate(precision, static_cast<int>(c), idx, names[idx]);
+          if (estimate.exterior_correlation > imitated.exterior_correlation) {
+            imitated = estimate;
+          }
+        }
+      }
+      if (imitated.camera_idx < 0 ||
+          imitated.exterior_correlation <= options_.max_exterior_correlation) {
+        return;
+      }
+      block_->cameras[imitated.camera_idx].free[imitated.param_idx] = false;
+      RemovedParameter removed;
+      removed.estimate = imitated;
+      removed.reason = StrCat("not determinable: correlation ",
+                              imitated.exterior_correlation,
+                              " with an exterior orientation > ",
+                              options_.max_exterior_correlation);
+      result_.removed_parameters.push_back(removed);
+      LOG(INFO) << "self-calibration: " << imitated.name << " "
+                << removed.reason << ", removed before step 2";
+    }
+  }
+
   void SelectSignificantParameters() {
     PrecisionOptions precision_options;
     precision_options.compute_residual_cofactors = false;
@@ -374,21 +423,41 @@ class Adjuster {
       const AdjustmentPrecision precision =
           ComputePrecision(block_, precision_options);
       RecordSigma0(precision.sigma0);
-      ParameterEstimate weakest;
+      // Determinability first (Gruen 1981): a parameter that the exterior
+      // orientations can imitate is not estimated, however large its t;
+      // then significance, the weakest parameter at a time.
+      ParameterEstimate weakest, imitated;
       weakest.t_value = std::numeric_limits<double>::infinity();
       for (size_t c = 0; c < block_->cameras.size(); ++c) {
         const BlockCamera& camera = block_->cameras[c];
         const std::vector<std::string> names =
             ParameterNames(camera.camera.model_id);
         for (int idx : candidates_[c]) {
-          if (!camera.free[idx] || HigherRadialTermFree(camera, idx)) continue;
+          if (!camera.free[idx]) continue;
           const ParameterEstimate estimate =
               Estimate(precision, static_cast<int>(c), idx, names[idx]);
+          if (estimate.exterior_correlation > imitated.exterior_correlation) {
+            imitated = estimate;
+          }
+          if (HigherRadialTermFree(camera, idx)) continue;
           if (estimate.t_value < weakest.t_value) weakest = estimate;
         }
       }
-      if (weakest.camera_idx < 0 ||
-          weakest.t_value >= options_.significance_t) {
+      std::string reason;
+      if (imitated.camera_idx >= 0 &&
+          imitated.exterior_correlation > options_.max_exterior_correlation) {
+        weakest = imitated;
+        reason = StrCat("not determinable: correlation ",
+                        imitated.exterior_correlation,
+                        " with an exterior orientation > ",
+                        options_.max_exterior_correlation);
+      } else if (weakest.camera_idx >= 0 &&
+                 weakest.t_value < options_.significance_t) {
+        reason = StrCat("not significant: t = ",
+                        weakest.t_value,
+                        " < ",
+                        options_.significance_t);
+      } else {
         return;
       }
       BlockCamera& camera = block_->cameras[weakest.camera_idx];
@@ -397,11 +466,10 @@ class Adjuster {
           initial_params_[weakest.camera_idx][weakest.param_idx];
       RemovedParameter removed;
       removed.estimate = weakest;
-      removed.reason =
-          StrCat("t = ", weakest.t_value, " < ", options_.significance_t);
+      removed.reason = reason;
       result_.removed_parameters.push_back(removed);
-      LOG(INFO) << "self-calibration: " << weakest.name << " not significant ("
-                << removed.reason << "), removed";
+      LOG(INFO) << "self-calibration: " << weakest.name << " " << reason
+                << ", removed";
       Solve(StrCat("without ", weakest.name), false);
     }
   }

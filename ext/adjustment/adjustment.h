@@ -55,6 +55,9 @@ struct AdjustmentOptions {
   // Correlations above this between estimated camera parameters are
   // flagged in the report.
   double max_correlation = 0.9;
+  // Determinability: with kSignificant a parameter correlated above this
+  // with an exterior orientation element is removed before the t-test.
+  double max_exterior_correlation = 0.99;
   BlunderDetection blunder_detection = BlunderDetection::kRobust;
   // Baarda's critical value for the normalised residual w (alpha0 = 0.1 %,
   // beta0 = 80 %, the classic 3.29).

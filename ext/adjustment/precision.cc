@@ -2,6 +2,7 @@
 #include "ext/adjustment/precision.h"
 
 #include "ext/adjustment/cost_functions.h"
+#include "ext/colmap/calibration_json.h"
 #include "ext/core/errors.h"
 
 #include <Eigen/Dense>
@@ -301,11 +302,16 @@ class PrecisionComputer {
                         " of the projection centre of image '",
                         block_->images[param.owner].name,
                         "'");
-        case BlockKind::kIntrinsics:
-          return StrCat("parameter ",
-                        k,
-                        " of camera ",
-                        block_->cameras[param.owner].camera.camera_id);
+        case BlockKind::kIntrinsics: {
+          const Camera& camera = block_->cameras[param.owner].camera;
+          const std::vector<std::string> names =
+              ParameterNames(camera.model_id);
+          return StrCat(
+              "parameter ",
+              k < static_cast<int>(names.size()) ? names[k] : std::to_string(k),
+              " of camera ",
+              camera.camera_id);
+        }
         case BlockKind::kPoint:
           return StrCat("object point ", param.owner);
       }
