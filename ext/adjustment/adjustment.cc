@@ -423,43 +423,29 @@ class Adjuster {
       const AdjustmentPrecision precision =
           ComputePrecision(block_, precision_options);
       RecordSigma0(precision.sigma0);
-      // Determinability first (Gruen 1981): a parameter that the exterior
-      // orientations can imitate is not estimated, however large its t;
-      // then significance, the weakest parameter at a time.
-      ParameterEstimate weakest, imitated;
+      // Significance, the weakest parameter at a time (determinability was
+      // tested before step 2).
+      ParameterEstimate weakest;
       weakest.t_value = std::numeric_limits<double>::infinity();
       for (size_t c = 0; c < block_->cameras.size(); ++c) {
         const BlockCamera& camera = block_->cameras[c];
         const std::vector<std::string> names =
             ParameterNames(camera.camera.model_id);
         for (int idx : candidates_[c]) {
-          if (!camera.free[idx]) continue;
+          if (!camera.free[idx] || HigherRadialTermFree(camera, idx)) continue;
           const ParameterEstimate estimate =
               Estimate(precision, static_cast<int>(c), idx, names[idx]);
-          if (estimate.exterior_correlation > imitated.exterior_correlation) {
-            imitated = estimate;
-          }
-          if (HigherRadialTermFree(camera, idx)) continue;
           if (estimate.t_value < weakest.t_value) weakest = estimate;
         }
       }
-      std::string reason;
-      if (imitated.camera_idx >= 0 &&
-          imitated.exterior_correlation > options_.max_exterior_correlation) {
-        weakest = imitated;
-        reason = StrCat("not determinable: correlation ",
-                        imitated.exterior_correlation,
-                        " with an exterior orientation > ",
-                        options_.max_exterior_correlation);
-      } else if (weakest.camera_idx >= 0 &&
-                 weakest.t_value < options_.significance_t) {
-        reason = StrCat("not significant: t = ",
-                        weakest.t_value,
-                        " < ",
-                        options_.significance_t);
-      } else {
+      if (weakest.camera_idx < 0 ||
+          weakest.t_value >= options_.significance_t) {
         return;
       }
+      const std::string reason = StrCat("not significant: t = ",
+                                        weakest.t_value,
+                                        " < ",
+                                        options_.significance_t);
       BlockCamera& camera = block_->cameras[weakest.camera_idx];
       camera.free[weakest.param_idx] = false;
       camera.camera.params[weakest.param_idx] =
