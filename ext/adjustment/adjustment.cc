@@ -5,6 +5,7 @@
 #include "ext/core/alignment.h"
 #include "ext/core/errors.h"
 #include "ext/core/progress.h"
+#include "ext/core/statistics.h"
 
 #include <glog/logging.h>
 
@@ -284,9 +285,7 @@ class Adjuster {
       std::vector<double> factor(3, 1.0);
       for (int g : estimable) {
         if (robust) {
-          std::vector<double>& w = abs_w[g];
-          std::nth_element(w.begin(), w.begin() + w.size() / 2, w.end());
-          const double scale = 1.4826 * w[w.size() / 2] * precision.sigma0;
+          const double scale = 1.4826 * Median(abs_w[g]) * precision.sigma0;
           factor[g] = scale * scale / reference;
         } else {
           factor[g] = vpv[g] / r[g] / reference;
@@ -299,9 +298,7 @@ class Adjuster {
                 << kNames[estimable[0]] << " x" << factor[estimable[0]] << ", "
                 << kNames[estimable[1]] << " x" << factor[estimable[1]];
       for (BlockObservation& observation : block_->observations) {
-        const double f = factor[GroupOf(observation)];
-        observation.covariance *= f;
-        observation.sigma_px *= std::sqrt(f);
+        observation.ScaleVariance(factor[GroupOf(observation)]);
       }
       result_.variance_components.clear();
       for (int g : estimable) {
@@ -312,9 +309,7 @@ class Adjuster {
             sigmas.push_back(observation.sigma_px);
           }
         }
-        std::nth_element(
-            sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
-        groups[g].median_sigma_px = sigmas[sigmas.size() / 2];
+        groups[g].median_sigma_px = Median(std::move(sigmas));
         result_.variance_components.push_back(groups[g]);
       }
       if (largest_change < std::log(1.05)) break;
@@ -340,12 +335,9 @@ class Adjuster {
       }
     }
     if (standardised.empty()) return;
-    const size_t mid = standardised.size() / 2;
-    std::nth_element(
-        standardised.begin(), standardised.begin() + mid, standardised.end());
     // normalized = z / sigma0: the median of |normalized| in units of the
     // least-squares sigma0 of the robust solution.
-    const double robust_scale = 1.4826 * standardised[mid];
+    const double robust_scale = 1.4826 * Median(std::move(standardised));
     if (!(robust_scale > 0)) return;
     int count = 0;
     for (size_t o = 0; o < block_->observations.size(); ++o) {
@@ -386,34 +378,54 @@ class Adjuster {
         return;  // step 2 and the statistics will say which one
       }
       ParameterEstimate imitated;
-      for (size_t c = 0; c < block_->cameras.size(); ++c) {
-        const BlockCamera& camera = block_->cameras[c];
-        const std::vector<std::string> names =
-            ParameterNames(camera.camera.model_id);
-        for (int idx : candidates_[c]) {
-          if (!camera.free[idx]) continue;
-          const ParameterEstimate estimate =
-              Estimate(precision, static_cast<int>(c), idx, names[idx]);
-          if (estimate.exterior_correlation > imitated.exterior_correlation) {
-            imitated = estimate;
-          }
+      for (const ParameterEstimate& estimate : FreeEstimates(precision)) {
+        if (estimate.exterior_correlation > imitated.exterior_correlation) {
+          imitated = estimate;
         }
       }
       if (imitated.camera_idx < 0 ||
           imitated.exterior_correlation <= options_.max_exterior_correlation) {
         return;
       }
-      block_->cameras[imitated.camera_idx].free[imitated.param_idx] = false;
-      RemovedParameter removed;
-      removed.estimate = imitated;
-      removed.reason = StrCat("not determinable: correlation ",
-                              imitated.exterior_correlation,
-                              " with an exterior orientation > ",
-                              options_.max_exterior_correlation);
-      result_.removed_parameters.push_back(removed);
-      LOG(INFO) << "self-calibration: " << imitated.name << " "
-                << removed.reason << ", removed before step 2";
+      RemoveParameter(imitated,
+                      StrCat("not determinable: correlation ",
+                             imitated.exterior_correlation,
+                             " with an exterior orientation > ",
+                             options_.max_exterior_correlation));
     }
+  }
+
+  // The estimates of every free candidate parameter.
+  std::vector<ParameterEstimate> FreeEstimates(
+      const AdjustmentPrecision& precision) const {
+    std::vector<ParameterEstimate> estimates;
+    for (size_t c = 0; c < block_->cameras.size(); ++c) {
+      const BlockCamera& camera = block_->cameras[c];
+      const std::vector<std::string> names =
+          ParameterNames(camera.camera.model_id);
+      for (int idx : candidates_[c]) {
+        if (camera.free[idx]) {
+          estimates.push_back(
+              Estimate(precision, static_cast<int>(c), idx, names[idx]));
+        }
+      }
+    }
+    return estimates;
+  }
+
+  // Holds a parameter at its initial value from now on, with the reason.
+  void RemoveParameter(const ParameterEstimate& estimate,
+                       const std::string& reason) {
+    BlockCamera& camera = block_->cameras[estimate.camera_idx];
+    camera.free[estimate.param_idx] = false;
+    camera.camera.params[estimate.param_idx] =
+        initial_params_[estimate.camera_idx][estimate.param_idx];
+    RemovedParameter removed;
+    removed.estimate = estimate;
+    removed.reason = reason;
+    result_.removed_parameters.push_back(removed);
+    LOG(INFO) << "self-calibration: " << estimate.name << " " << reason
+              << ", removed";
   }
 
   void SelectSignificantParameters() {
@@ -427,35 +439,22 @@ class Adjuster {
       // tested before step 2).
       ParameterEstimate weakest;
       weakest.t_value = std::numeric_limits<double>::infinity();
-      for (size_t c = 0; c < block_->cameras.size(); ++c) {
-        const BlockCamera& camera = block_->cameras[c];
-        const std::vector<std::string> names =
-            ParameterNames(camera.camera.model_id);
-        for (int idx : candidates_[c]) {
-          if (!camera.free[idx] || HigherRadialTermFree(camera, idx)) continue;
-          const ParameterEstimate estimate =
-              Estimate(precision, static_cast<int>(c), idx, names[idx]);
-          if (estimate.t_value < weakest.t_value) weakest = estimate;
+      for (const ParameterEstimate& estimate : FreeEstimates(precision)) {
+        if (HigherRadialTermFree(block_->cameras[estimate.camera_idx],
+                                 estimate.param_idx)) {
+          continue;
         }
+        if (estimate.t_value < weakest.t_value) weakest = estimate;
       }
       if (weakest.camera_idx < 0 ||
           weakest.t_value >= options_.significance_t) {
         return;
       }
-      const std::string reason = StrCat("not significant: t = ",
-                                        weakest.t_value,
-                                        " < ",
-                                        options_.significance_t);
-      BlockCamera& camera = block_->cameras[weakest.camera_idx];
-      camera.free[weakest.param_idx] = false;
-      camera.camera.params[weakest.param_idx] =
-          initial_params_[weakest.camera_idx][weakest.param_idx];
-      RemovedParameter removed;
-      removed.estimate = weakest;
-      removed.reason = reason;
-      result_.removed_parameters.push_back(removed);
-      LOG(INFO) << "self-calibration: " << weakest.name << " " << reason
-                << ", removed";
+      RemoveParameter(weakest,
+                      StrCat("not significant: t = ",
+                             weakest.t_value,
+                             " < ",
+                             options_.significance_t));
       Solve(StrCat("without ", weakest.name), false);
     }
   }

@@ -25,6 +25,7 @@
 #include <ceres/cost_function.h>
 
 #include <array>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -89,6 +90,15 @@ struct BlockObservation {
   // sigma_px in x and y. With a covariance, sigma_px = sqrt(trace / 2).
   double sigma_px = 1.0;
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
+  // Sets the covariance and sigma_px with it; ScaleVariance multiplies both.
+  void SetCovariance(const Eigen::Matrix2d& c) {
+    covariance = c;
+    sigma_px = std::sqrt(c.trace() / 2);
+  }
+  void ScaleVariance(double factor) {
+    covariance *= factor;
+    sigma_px *= std::sqrt(factor);
+  }
   // Rejected observations (data snooping) stay listed but inactive.
   bool active = true;
 };

@@ -10,6 +10,7 @@
 #include "ext/core/camera_conversion.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/core/statistics.h"
 
 #include <Eigen/Eigenvalues>
 #include <glog/logging.h>
@@ -84,9 +85,6 @@ void TakeKeypointsFromDatabase(const std::string& input_path,
     image.points2D.resize(num_keypoints);
     for (size_t k = 0; k < num_keypoints; ++k) {
       image.points2D[k].xy = KeypointXY(keypoints, static_cast<int>(k));
-      if (k >= keypoint_limit[image_id]) {
-        image.points2D[k].point3D_id = kInvalidPoint3DId;
-      }
     }
   }
   if (!dropped) return;
@@ -203,6 +201,21 @@ std::map<camera_t, Camera> CalibrationsBesideModel(const std::string& path) {
 
 }  // namespace
 
+std::vector<TiePointRecord> ReadTiePointsFor(Database* database,
+                                             TiePointSource source) {
+  if (source == TiePointSource::kModel) return {};
+  std::vector<TiePointRecord> points = ReadTiePoints(database);
+  if (points.empty() &&
+      (source == TiePointSource::kAlsm || source == TiePointSource::kBoth)) {
+    ThrowInputError(database->path(),
+                    ": --tie_points ",
+                    source == TiePointSource::kAlsm ? "alsm" : "both",
+                    ", but the database has no tie points (bayon_tie_points; "
+                    "run bayon tiepoints first, or --tie_points model)");
+  }
+  return points;
+}
+
 TiePointSource TiePointSourceFromName(const std::string& name) {
   if (name == "auto") return TiePointSource::kAuto;
   if (name == "model") return TiePointSource::kModel;
@@ -279,20 +292,8 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
 
   Database database(database_path, Database::Mode::kReadOnly);
   const std::vector<TiePointRecord> tie_points =
-      options.tie_points == TiePointSource::kModel
-          ? std::vector<TiePointRecord>()
-          : ReadTiePoints(&database);
-  if (options.tie_points == TiePointSource::kAlsm && tie_points.empty()) {
-    ThrowInputError(database_path,
-                    ": --tie_points alsm, but the database has no tie points "
-                    "(bayon_tie_points; run bayon tiepoints first)");
-  }
-  if (options.tie_points == TiePointSource::kBoth && tie_points.empty()) {
-    ThrowInputError(database_path,
-                    ": --tie_points both, but the database has no tie points "
-                    "(bayon_tie_points; run bayon tiepoints first)");
-  }
-  input.alsm_tie_points = !tie_points.empty();
+      ReadTiePointsFor(&database, options.tie_points);
+  const bool use_tie_points = !tie_points.empty();
   const bool replace = options.tie_points == TiePointSource::kAlsm;
   if (!replace) {
     std::map<image_t, size_t> tie_counts;
@@ -304,7 +305,7 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
     TakeKeypointsFromDatabase(input_path, tie_counts, &database, &scene);
   }
   std::map<ObservationKey, Eigen::Matrix2d> covariances;
-  if (input.alsm_tie_points) {
+  if (use_tie_points) {
     covariances = TakeTiePointsFromDatabase(input_path,
                                             tie_points,
                                             replace,
@@ -380,11 +381,9 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
     auto it =
         covariances.find({input.block.images[observation.image_idx].image_id,
                           observation.point2D_idx});
-    if (it == covariances.end()) continue;
-    observation.covariance = it->second;
-    observation.sigma_px = std::sqrt(it->second.trace() / 2);
+    if (it != covariances.end()) observation.SetCovariance(it->second);
   }
-  if (input.alsm_tie_points) {
+  if (use_tie_points) {
     // The reference precision: the median tie observation's, so that
     // sigma0 a posteriori in pixels reads as the precision of a typical
     // observation and the variance factor as how far the matching
@@ -395,9 +394,7 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
         sigmas.push_back(observation.sigma_px);
       }
     }
-    std::nth_element(
-        sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
-    input.block.sigma0_px = sigmas[sigmas.size() / 2];
+    input.block.sigma0_px = Median(sigmas);
     input.notes.push_back(
         StrCat(tie_points.size(),
                " tie points from bayon_tie_points",

@@ -17,6 +17,8 @@
 
 #include "ext/adjustment/adjustment_block.h"
 #include "ext/adjustment/datum.h"
+#include "ext/colmap/database.h"
+#include "ext/colmap/table_tie_points.h"
 #include "ext/core/scene.h"
 
 #include <Eigen/Core>
@@ -67,7 +69,6 @@ struct AdjustmentInput {
   // the only 2D points, in the order of the keypoints of tiepoints' COLMAP
   // export, and 3D point ids are the tie point ids).
   Scene scene;
-  bool alsm_tie_points = false;
   AdjustmentBlock block;
   DatumSetup datum;
   std::vector<CameraSource> cameras;
@@ -84,6 +85,11 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
                                     const std::string& input_path,
                                     const std::string& control_path,
                                     const AdjustmentInputOptions& options);
+
+// The tie points `source` asks for: none for kModel, else every tie point
+// of the database; kAlsm and kBoth throw InputError where there are none.
+std::vector<TiePointRecord> ReadTiePointsFor(Database* database,
+                                             TiePointSource source);
 
 // A least-squares covariance (pixels^2) with its eigenvalues raised to
 // min_sigma^2 (min_tie_sigma_px).

@@ -204,11 +204,10 @@ TEST(Adjustment, ObservationsAreWeightedByTheirCovariance) {
       const Eigen::Matrix2d R = Eigen::Rotation2Dd(angle).toRotationMatrix();
       const Eigen::Vector2d sigmas(0.03 + 0.47 * uniform(rng),
                                    0.03 + 0.07 * uniform(rng));
-      observation.covariance =
-          R * sigmas.cwiseAbs2().asDiagonal() * R.transpose();
+      observation.SetCovariance(R * sigmas.cwiseAbs2().asDiagonal() *
+                                R.transpose());
       observation.xy +=
           R * sigmas.cwiseProduct(Eigen::Vector2d(normal(rng), normal(rng)));
-      observation.sigma_px = std::sqrt(observation.covariance.trace() / 2);
     }
     block.sigma0_px = 0.2;
     block.cameras[0].camera = test.truth.scene.cameras.at(1);  // the true one
@@ -266,8 +265,7 @@ TEST(Adjustment, VarianceComponentsFindEachGroupsPrecision) {
     const double sigma = tie ? 0.1 : 0.3;
     observation.xy += sigma * Eigen::Vector2d(normal(rng), normal(rng));
     if (tie) {
-      observation.covariance = 0.0025 * Eigen::Matrix2d::Identity();
-      observation.sigma_px = 0.05;
+      observation.SetCovariance(0.0025 * Eigen::Matrix2d::Identity());
     } else {
       observation.sigma_px = 1.0;
     }

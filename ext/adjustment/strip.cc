@@ -13,6 +13,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
+#include "ext/core/statistics.h"
 
 #include <Eigen/Dense>
 #include <glog/logging.h>
@@ -63,12 +64,6 @@ class DisjointSets {
  private:
   std::vector<int> parent_;
 };
-
-double Median(std::vector<double> values) {
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
-}
 
 Eigen::Quaterniond ExpRotation(const Eigen::Vector3d& omega) {
   const double angle = omega.norm();
@@ -180,17 +175,8 @@ class StripBuilder {
                       ": no verified image pairs (two_view_geometries); run "
                       "bayon match and bayon relative, or a COLMAP matcher");
     }
-    std::vector<TiePointRecord> tie_points;
-    if (options_.tie_points != TiePointSource::kModel) {
-      tie_points = ReadTiePoints(&database);
-    }
-    if ((options_.tie_points == TiePointSource::kAlsm ||
-         options_.tie_points == TiePointSource::kBoth) &&
-        tie_points.empty()) {
-      ThrowInputError(database_path_,
-                      ": the database has no tie points (bayon_tie_points); "
-                      "run bayon tiepoints first, or --tie_points model");
-    }
+    const std::vector<TiePointRecord> tie_points =
+        ReadTiePointsFor(&database, options_.tie_points);
     use_matches_ = options_.tie_points != TiePointSource::kAlsm;
     AppendTieObservations(tie_points);
   }
@@ -395,11 +381,9 @@ class StripBuilder {
   std::vector<std::pair<int, int>> SharedObservations(int a, int b) const {
     std::vector<std::pair<int, int>> shared;
     for (const auto& [keypoint_a, track] : track_at_[a]) {
-      auto it = track_at_[b].end();
       for (const auto& [image_idx, keypoint] : tracks_[track]) {
-        if (image_idx == b) it = track_at_[b].find(keypoint);
+        if (image_idx == b) shared.push_back({keypoint_a, keypoint});
       }
-      if (it != track_at_[b].end()) shared.push_back({keypoint_a, it->first});
     }
     return shared;
   }
@@ -887,9 +871,8 @@ class StripBuilder {
         observation.sigma_px = options_.image_sigma_px;
         const StripImage& image = images_[image_idx];
         if (keypoint >= image.num_keypoints) {
-          observation.covariance =
-              image.tie_covariances[keypoint - image.num_keypoints];
-          observation.sigma_px = std::sqrt(observation.covariance.trace() / 2);
+          observation.SetCovariance(
+              image.tie_covariances[keypoint - image.num_keypoints]);
         }
         block_.observations.push_back(observation);
         ++count;
