@@ -12,6 +12,7 @@
 #include "ext/colmap/table_matches.h"
 #include "ext/colmap/table_relative.h"
 #include "ext/core/file_util.h"
+#include "ext/core/statistics.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -40,7 +41,9 @@ void RunOk(const std::vector<std::string>& args) {
 // true calibration in its database, Moravec points on 8-pixel patches,
 // ring matches (two neighbours) and both relative orientations: with the
 // true interior orientation (database.db) and with distortion assumed zero
-// (zero_distortion.db).
+// (zero_distortion.db); and the matches refined and propagated by
+// least-squares matching, oriented with the true interior orientation
+// (lsm.db).
 std::string TowerFixture() {
   return testing::SharedFixture(
       "relative_pipeline_tower", [](const std::string& dir) {
@@ -70,15 +73,22 @@ std::string TowerFixture() {
                "0",
                "--num_threads",
                "2"});
-        RunOk({"match",
-               "--database_path",
-               db,
-               "--image_path",
-               ws + "/images",
-               "--pairing",
-               "ring",
-               "--num_threads",
-               "2"});
+        const std::string lsm_db = ws + "/lsm.db";
+        testing::CopyTree(db, lsm_db);
+        for (const std::string& path : {db, lsm_db}) {
+          RunOk({"match",
+                 "--database_path",
+                 path,
+                 "--image_path",
+                 ws + "/images",
+                 "--pairing",
+                 "ring",
+                 "--lsm_refinement",
+                 path == lsm_db ? "1" : "0",
+                 "--num_threads",
+                 "2"});
+        }
+        RunOk({"relative", "--database_path", lsm_db, "--num_threads", "2"});
         testing::CopyTree(db, ws + "/zero_distortion.db");
         RunOk({"relative", "--database_path", db, "--num_threads", "2"});
         RunOk({"relative",
@@ -115,6 +125,12 @@ struct AdjacentPairs {
   int num_within = 0;  // within both bounds
   double max_rotation_deg = 0;
   double max_base_deg = 0;
+  // Errors in units of the pair's own standard deviations (the norm of
+  // omega, phi, kappa's; of the base direction's two): the largest, and the
+  // median rotation error.
+  double max_rotation_ratio = 0;
+  double max_base_ratio = 0;
+  double median_rotation_deg = 0;
 };
 
 // Every adjacent station pair of the ring (image i with i + 1, the last
@@ -126,6 +142,7 @@ AdjacentPairs JudgeAdjacentPairs(const std::string& db_path,
   Database database(db_path, Database::Mode::kReadOnly);
   const std::vector<DatabaseImage> images = database.ReadAllImages();
   AdjacentPairs result;
+  std::vector<double> rotation_errors;
   const int n = static_cast<int>(images.size());
   for (int k = 0; k < n; ++k) {
     const DatabaseImage& first = images[k];
@@ -154,6 +171,12 @@ AdjacentPairs JudgeAdjacentPairs(const std::string& db_path,
     result.max_rotation_deg =
         std::max(result.max_rotation_deg, error.rotation_deg);
     result.max_base_deg = std::max(result.max_base_deg, error.base_deg);
+    result.max_rotation_ratio =
+        std::max(result.max_rotation_ratio,
+                 error.rotation_deg / record->std_omega_phi_kappa_deg.norm());
+    result.max_base_ratio = std::max(
+        result.max_base_ratio, error.base_deg / record->std_base_deg.norm());
+    rotation_errors.push_back(error.rotation_deg);
     std::printf(
         "  %s - %s: %4d of %4d matches, sigma0 %.3f px, rotation error "
         "%.4f deg (std %.4f), base error %.3f deg (std %.3f)%s\n",
@@ -168,16 +191,21 @@ AdjacentPairs JudgeAdjacentPairs(const std::string& db_path,
         record->std_base_deg.norm(),
         within ? "" : "  (outside)");
   }
+  if (!rotation_errors.empty()) result.median_rotation_deg = Median(rotation_errors);
   std::printf(
       "  %d of %d adjacent pairs oriented, %d within %.2f deg rotation and "
-      "%.1f deg base; largest errors %.4f deg and %.3f deg\n",
+      "%.1f deg base; largest errors %.4f deg and %.3f deg (%.1f and %.1f "
+      "standard deviations), median rotation error %.4f deg\n",
       result.num_oriented,
       result.num_pairs,
       result.num_within,
       max_rotation_deg,
       max_base_deg,
       result.max_rotation_deg,
-      result.max_base_deg);
+      result.max_base_deg,
+      result.max_rotation_ratio,
+      result.max_base_ratio,
+      result.median_rotation_deg);
   return result;
 }
 
@@ -202,6 +230,30 @@ TEST(RelativePipeline, DISABLED_TowerAdjacentPairsAgreeWithTheTruth) {
   EXPECT_EQ(pairs.num_within, pairs.num_oriented)
       << "oriented adjacent pairs outside " << kMaxRotationErrorDeg
       << " deg rotation / " << kMaxBaseErrorDeg << " deg base";
+}
+
+// Least-squares conjugate points (match --lsm_refinement 1): the peaks'
+// bias is gone, so the pairs agree with the truth to about their standard
+// deviations, and the median error is a quarter of the correlation peaks'
+// (measured 2026-12-02: 0.045 against 0.216 deg; largest 0.50 against 2.35
+// deg). The 0.02 deg is below the precision of most of these pairs
+// (reported standard deviations 0.02 - 0.3 deg: the tower fills the middle
+// third of 1200 x 800 frames), see the disabled test above.
+TEST(RelativePipeline, LeastSquaresConjugatePointsOrientTheTowerPairs) {
+  const std::string ws = TowerFixture() + "/ws";
+  const Scene truth = ReadModel(ws + "/gt/sparse");
+  std::printf("tower, least-squares conjugate points:\n");
+  const AdjacentPairs lsm = JudgeAdjacentPairs(
+      ws + "/lsm.db", truth, kMaxRotationErrorDeg, kMaxBaseErrorDeg);
+  std::printf("tower, correlation peaks:\n");
+  const AdjacentPairs peaks = JudgeAdjacentPairs(
+      ws + "/database.db", truth, kMaxRotationErrorDeg, kMaxBaseErrorDeg);
+  EXPECT_GE(lsm.num_oriented, 13);
+  EXPECT_LT(lsm.median_rotation_deg, 0.1);
+  EXPECT_LT(lsm.median_rotation_deg, 0.5 * peaks.median_rotation_deg);
+  EXPECT_LT(lsm.max_rotation_deg, 0.5 * peaks.max_rotation_deg);
+  EXPECT_LT(lsm.max_rotation_ratio, 4.0);
+  EXPECT_LT(lsm.max_base_ratio, 4.0);
 }
 
 // The paper's start: distortion assumed zero. Reported, not bounded (the

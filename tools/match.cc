@@ -60,6 +60,21 @@ int RunMatch(int argc, char** argv) {
   app.add_option("--min_support",
                  relaxation.min_support,
                  "Consistent neighbours a match needs");
+  app.add_option("--lsm_refinement",
+                 options.lsm_refinement,
+                 "1: conjugate points refined by least-squares matching");
+  app.add_option("--lsm_max_sigma_px",
+                 options.refinement.lsm.max_sigma_px,
+                 "Refined points less precise than this are dropped, px");
+  app.add_option("--lsm_keep_unrefined",
+                 options.refinement.keep_unrefined,
+                 "1: matches LSM rejects stay at their correlation peaks");
+  app.add_option("--propagation_rounds",
+                 options.refinement.propagation_rounds,
+                 "Rounds of least-squares propagation (0: none)");
+  app.add_option("--max_keypoint_distance_px",
+                 options.refinement.max_keypoint_distance_px,
+                 "A propagated point must lie this near an image-2 keypoint");
   app.add_option("--min_num_matches",
                  options.min_num_matches,
                  "Pairs with fewer matches are not written");

@@ -25,6 +25,7 @@ void MatchingOptions::Check() const {
   pairing.Check();
   patches.Check();
   correlation.Check();
+  if (lsm_refinement) refinement.Check();
   const std::string shift_rule =
       StrCat("< patches.refine_radius (", patches.refine_radius, ")");
   CheckOption(correlation.max_keypoint_shift_px < patches.refine_radius,
@@ -44,6 +45,7 @@ struct ImageData {
   std::string path;
   int num_keypoints = 0;
   std::unique_ptr<ImagePatches> patches;
+  cv::Mat gray;  // for the least-squares refinement
 };
 
 std::map<image_t, ImageData> ReadImageList(Database* database,
@@ -120,6 +122,18 @@ void MatchPair(const std::map<image_t, ImageData>& data,
     return;
   }
   job->matches = MatchImagePatches(image1, image2, options.correlation);
+  if (options.lsm_refinement) {
+    const ConjugateRefinementReport refinement =
+        RefineConjugatePoints(data.at(report.image_id1).gray,
+                              data.at(report.image_id2).gray,
+                              image1.xy,
+                              image2.xy,
+                              options.refinement,
+                              &job->matches);
+    report.num_lsm_rejected = refinement.NumRejected();
+    report.lsm_median_shift_px = refinement.median_shift_px;
+    report.num_propagated = refinement.num_propagated;
+  }
   const PairMatches& matches = job->matches;
   report.rotation_deg = matches.mapping.RotationDeg();
   report.mapping_found = matches.mapping.found;
@@ -160,7 +174,7 @@ void WritePair(Database* database,
   WriteMatchRecord(database, report.image_id1, report.image_id2, record);
 }
 
-void LogPair(const PairMatchReport& report) {
+void LogPair(const MatchingOptions& options, const PairMatchReport& report) {
   std::ostringstream line;
   line << report.name1 << " - " << report.name2 << ": ";
   if (report.skipped) {
@@ -170,8 +184,13 @@ void LogPair(const PairMatchReport& report) {
          << "rotation " << report.rotation_deg << " deg ("
          << (report.mapping_found ? "" : "no ") << "global mapping, "
          << report.mapping_inliers << " votes), " << report.num_candidates
-         << " candidates, " << report.num_relaxed << " after relaxation, "
-         << report.num_matches << " matches, " << report.seconds << " s";
+         << " candidates, " << report.num_relaxed << " after relaxation, ";
+    if (options.lsm_refinement) {
+      line << report.num_lsm_rejected << " not refined by LSM (median move "
+           << report.lsm_median_shift_px << " px), "
+           << report.num_propagated << " propagated, ";
+    }
+    line << report.num_matches << " matches, " << report.seconds << " s";
     if (!report.written) line << " -- not written: " << report.reason;
   }
   if (report.written || report.skipped) {
@@ -241,8 +260,10 @@ MatchingSummary MatchImages(const std::string& database_path,
       for (int i = 0; i < keypoints[k].rows(); ++i) {
         xy[i] = KeypointXY(keypoints[k], i);
       }
-      entry.patches = std::make_unique<ImagePatches>(ExtractImagePatches(
-          ReadImageGrayFloat(entry.path), xy, options.patches));
+      cv::Mat gray = ReadImageGrayFloat(entry.path);
+      entry.patches = std::make_unique<ImagePatches>(
+          ExtractImagePatches(gray, xy, options.patches));
+      if (options.lsm_refinement) entry.gray = std::move(gray);
       progress.Add();
     });
     progress.Finish();
@@ -282,7 +303,7 @@ MatchingSummary MatchImages(const std::string& database_path,
   progress.Finish();
 
   for (const PairJob& job : jobs) {
-    LogPair(job.report);
+    LogPair(options, job.report);
     if (job.report.skipped) {
       ++summary.num_skipped;
     } else if (job.report.written) {

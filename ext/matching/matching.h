@@ -9,6 +9,7 @@
 #pragma once
 
 #include "ext/core/types.h"
+#include "ext/matching/conjugate_refinement.h"
 #include "ext/matching/correlation_matcher.h"
 #include "ext/matching/pair_selection.h"
 
@@ -21,6 +22,14 @@ struct MatchingOptions {
   PairingOptions pairing;
   PatchOptions patches;
   CorrelationMatchingOptions correlation;
+  // Least-squares refinement and propagation of the conjugate points
+  // (conjugate_refinement.h); off: the correlation peaks, as the paper's
+  // matching gives them. Off by default: on the rendered tower it makes the
+  // adjacent pairs' relative orientations 4 times more accurate, but weak
+  // pairs lose matches (the temple ring's chain through tie points and
+  // strip then ends less accurate; see issue 4's note).
+  bool lsm_refinement = false;
+  ConjugateRefinementOptions refinement;
   // Pairs with fewer conjugate points are reported and not written: the
   // relative orientation needs 8.
   int min_num_matches = 8;
@@ -46,6 +55,12 @@ struct PairMatchReport {
   int num_candidates = 0;
   int num_relaxed = 0;
   int num_matches = 0;
+  // Least-squares refinement: matches it rejected (kept at their
+  // correlation peaks, or dropped), the median move from the peaks, and the
+  // matches propagation added.
+  int num_lsm_rejected = 0;
+  double lsm_median_shift_px = 0;
+  int num_propagated = 0;
   double seconds = 0;
 };
 
