@@ -191,7 +191,8 @@ AdjacentPairs JudgeAdjacentPairs(const std::string& db_path,
         record->std_base_deg.norm(),
         within ? "" : "  (outside)");
   }
-  if (!rotation_errors.empty()) result.median_rotation_deg = Median(rotation_errors);
+  if (!rotation_errors.empty())
+    result.median_rotation_deg = Median(rotation_errors);
   std::printf(
       "  %d of %d adjacent pairs oriented, %d within %.2f deg rotation and "
       "%.1f deg base; largest errors %.4f deg and %.3f deg (%.1f and %.1f "

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <unordered_map>
 
@@ -65,8 +66,7 @@ bool FitAffinity(const std::vector<Eigen::Vector2d>& xy1,
   }
   const Eigen::Matrix<double, 3, 2> X = svd.solve(B);
   affinity->leftCols<2>() = X.topRows<2>().transpose();
-  affinity->col(2) =
-      X.row(2).transpose() - affinity->leftCols<2>() * origin;
+  affinity->col(2) = X.row(2).transpose() - affinity->leftCols<2>() * origin;
   return true;
 }
 
@@ -114,7 +114,8 @@ std::vector<std::optional<Affinity2d>> LocalAffinities(
       continue;
     }
     const double det = affinity.leftCols<2>().determinant();
-    if (det * reference_det <= 0 || std::abs(det) < 0.1 * std::abs(reference_det) ||
+    if (det * reference_det <= 0 ||
+        std::abs(det) < 0.1 * std::abs(reference_det) ||
         std::abs(det) > 10 * std::abs(reference_det)) {
       continue;
     }
@@ -124,10 +125,6 @@ std::vector<std::optional<Affinity2d>> LocalAffinities(
 }
 
 namespace {
-
-Eigen::Vector2d PixelCentre(const Eigen::Vector2d& xy) {
-  return PixelOf(xy).cast<double>() + Eigen::Vector2d(0.5, 0.5);
-}
 
 // One propagation round (header); returns the number of points added.
 int Propagate(const cv::Mat& gray1,
@@ -147,7 +144,7 @@ int Propagate(const cv::Mat& gray1,
   for (size_t i = 0; i < keypoints1.size(); ++i) {
     if (used1[i]) continue;
     todo.push_back(static_cast<int>(i));
-    queries.push_back(PixelCentre(keypoints1[i]));
+    queries.push_back(PixelCentreOf(keypoints1[i]));
   }
   const std::vector<std::optional<Affinity2d>> local = LocalAffinities(
       matches->reference_xy1,
@@ -156,21 +153,41 @@ int Propagate(const cv::Mat& gray1,
       matches->mapping.affine.leftCols<2>(),
       options.neighbor_fraction * std::max(gray1.cols, gray1.rows),
       options.num_neighbors);
-  // Image-2 keypoints on a grid of cells as wide as the largest distance.
+  // The unused image-2 keypoints on a grid of cells as wide as the largest
+  // distance, so that the nearest one lies in the 3 x 3 cells around a point.
   const double cell = std::max(1.0, options.max_keypoint_distance_px);
-  const int grid_w = static_cast<int>(gray2.cols / cell) + 1;
-  const int grid_h = static_cast<int>(gray2.rows / cell) + 1;
-  std::unordered_map<int, std::vector<int>> grid;
-  const auto cell_of = [&](const Eigen::Vector2d& xy, int* cx, int* cy) {
-    *cx = std::clamp(static_cast<int>(xy.x() / cell), 0, grid_w - 1);
-    *cy = std::clamp(static_cast<int>(xy.y() / cell), 0, grid_h - 1);
+  const auto key = [](long long cx, long long cy) {
+    return cx * 1000003LL + cy;
   };
+  std::unordered_map<long long, std::vector<int>> grid;
   for (size_t j = 0; j < keypoints2.size(); ++j) {
     if (used2[j]) continue;
-    int cx, cy;
-    cell_of(keypoints2[j], &cx, &cy);
-    grid[cy * grid_w + cx].push_back(static_cast<int>(j));
+    grid[key(std::floor(keypoints2[j].x() / cell),
+             std::floor(keypoints2[j].y() / cell))]
+        .push_back(static_cast<int>(j));
   }
+  // The nearest unused image-2 keypoint within the largest distance, or -1.
+  const auto nearest_keypoint = [&](const Eigen::Vector2d& xy,
+                                    double* distance) {
+    const long long cx = std::floor(xy.x() / cell);
+    const long long cy = std::floor(xy.y() / cell);
+    int nearest = -1;
+    *distance = options.max_keypoint_distance_px;
+    for (long long dy = -1; dy <= 1; ++dy) {
+      for (long long dx = -1; dx <= 1; ++dx) {
+        const auto it = grid.find(key(cx + dx, cy + dy));
+        if (it == grid.end()) continue;
+        for (int j : it->second) {
+          const double d = (keypoints2[j] - xy).norm();
+          if (d <= *distance) {
+            *distance = d;
+            nearest = j;
+          }
+        }
+      }
+    }
+    return nearest;
+  };
   KeypointRefinementOptions lsm = options.lsm;
   lsm.max_shift_px = options.propagation_max_shift_px;
   struct Claim {
@@ -192,23 +209,8 @@ int Propagate(const cv::Mat& gray1,
     const ObservationRefinement refined = RefineObservation(
         gray1, queries[q], gray2, start, affinity.leftCols<2>(), lsm);
     if (refined.outcome != ObservationOutcome::kRefined) continue;
-    int cx, cy;
-    cell_of(refined.refined_xy, &cx, &cy);
-    int nearest = -1;
-    double best = options.max_keypoint_distance_px;
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        const auto it = grid.find((cy + dy) * grid_w + cx + dx);
-        if (cx + dx < 0 || cx + dx >= grid_w || it == grid.end()) continue;
-        for (int j : it->second) {
-          const double d = (keypoints2[j] - refined.refined_xy).norm();
-          if (d <= best) {
-            best = d;
-            nearest = j;
-          }
-        }
-      }
-    }
+    double best = 0;
+    const int nearest = nearest_keypoint(refined.refined_xy, &best);
     if (nearest < 0) continue;
     claims.push_back({todo[q],
                       nearest,
@@ -230,7 +232,8 @@ int Propagate(const cv::Mat& gray1,
   for (size_t k = 0; k < accepted.size(); ++k) {
     rows(num_matches + k, 0) = static_cast<uint32_t>(accepted[k].idx1);
     rows(num_matches + k, 1) = static_cast<uint32_t>(accepted[k].idx2);
-    matches->reference_xy1.push_back(PixelCentre(keypoints1[accepted[k].idx1]));
+    matches->reference_xy1.push_back(
+        PixelCentreOf(keypoints1[accepted[k].idx1]));
     matches->refined_xy2.push_back(accepted[k].xy2);
     matches->ncc.push_back(accepted[k].correlation);
   }

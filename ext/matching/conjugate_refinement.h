@@ -54,7 +54,6 @@ struct ConjugateRefinementOptions {
     KeypointRefinementOptions options;
     options.max_shift_px = 1.5;
     options.max_sigma_px = 0.25;
-    options.num_threads = 1;
     return options;
   }();
   // Keep a match that least-squares matching rejects at its correlation
@@ -99,13 +98,14 @@ struct ConjugateRefinementReport {
   std::array<int, kNumObservationOutcomes> num_rejected{};
   int NumRejected() const;
   double median_shift_px = 0;  // of the refined points from the peaks
-  int num_propagated = 0;       // conjugate points added by propagation
+  int num_propagated = 0;      // conjugate points added by propagation
 };
 
 // Refines `matches` (reference_xy1 / refined_xy2) in place on the grey
 // images (CV_32F, 0..255); rejected matches stay at their correlation
-// peaks (keep_unrefined) or are removed from all of its arrays. Then propagates them (header) from the keypoints of both images
-// (pixel coordinates, the keypoint indices of `matches`).
+// peaks (keep_unrefined) or are removed from all of its arrays. Then propagates
+// them (header) from the keypoints of both images (pixel coordinates, the
+// keypoint indices of `matches`).
 ConjugateRefinementReport RefineConjugatePoints(
     const cv::Mat& gray1,
     const cv::Mat& gray2,

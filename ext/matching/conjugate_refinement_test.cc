@@ -95,7 +95,8 @@ TEST(LocalAffinities, RecoverTheAffinityDespiteBlunders) {
   // Two blunders among the nearest neighbours of the query.
   xy2[10] += Eigen::Vector2d(9, -6);
   xy2[12] += Eigen::Vector2d(-7, 8);
-  const std::vector<Eigen::Vector2d> queries = {xy1[11], Eigen::Vector2d(2000, 2000)};
+  const std::vector<Eigen::Vector2d> queries = {xy1[11],
+                                                Eigen::Vector2d(2000, 2000)};
   const auto local = LocalAffinities(
       xy1, xy2, queries, Eigen::Matrix2d::Identity(), 100.0, 12);
   ASSERT_TRUE(local[0].has_value());
@@ -113,9 +114,13 @@ TEST(ConjugateRefinement, RemovesTheBiasOfTheCorrelationPeaks) {
   const double before = RmsError(scene, matches);
   ConjugateRefinementOptions options;
   options.propagation_rounds = 0;
-  const ConjugateRefinementReport report = RefineConjugatePoints(
-      scene.gray1, scene.gray2, scene.keypoints1, scene.keypoints2, options,
-      &matches);
+  const ConjugateRefinementReport report =
+      RefineConjugatePoints(scene.gray1,
+                            scene.gray2,
+                            scene.keypoints1,
+                            scene.keypoints2,
+                            options,
+                            &matches);
   EXPECT_GE(report.num_refined, 54);
   EXPECT_EQ(report.num_refined + report.NumRejected(), 60);
   EXPECT_EQ(matches.matches.rows(), report.num_refined);
@@ -131,11 +136,15 @@ TEST(ConjugateRefinement, DropsWrongConjugates) {
   for (int k : {5, 20, 41}) matches.refined_xy2[k] += Eigen::Vector2d(6, -5);
   ConjugateRefinementOptions options;
   options.propagation_rounds = 0;
-  RefineConjugatePoints(scene.gray1, scene.gray2, scene.keypoints1,
-                        scene.keypoints2, options, &matches);
+  RefineConjugatePoints(scene.gray1,
+                        scene.gray2,
+                        scene.keypoints1,
+                        scene.keypoints2,
+                        options,
+                        &matches);
   for (int k = 0; k < matches.matches.rows(); ++k) {
-    EXPECT_LT((matches.refined_xy2[k] -
-               scene.conjugates[matches.matches(k, 0)]).norm(),
+    EXPECT_LT((matches.refined_xy2[k] - scene.conjugates[matches.matches(k, 0)])
+                  .norm(),
               0.2)
         << "keypoint " << matches.matches(k, 0);
   }
@@ -144,14 +153,19 @@ TEST(ConjugateRefinement, DropsWrongConjugates) {
 TEST(ConjugateRefinement, KeepsTheUnrefinedPeaksOnRequest) {
   const Scene scene = MakeScene();
   PairMatches matches = StartingMatches(scene, 60, 0.3);
-  const Eigen::Vector2d wrong = matches.refined_xy2[20] + Eigen::Vector2d(6, -5);
+  const Eigen::Vector2d wrong =
+      matches.refined_xy2[20] + Eigen::Vector2d(6, -5);
   matches.refined_xy2[20] = wrong;
   ConjugateRefinementOptions options;
   options.propagation_rounds = 0;
   options.keep_unrefined = true;
-  const ConjugateRefinementReport report = RefineConjugatePoints(
-      scene.gray1, scene.gray2, scene.keypoints1, scene.keypoints2, options,
-      &matches);
+  const ConjugateRefinementReport report =
+      RefineConjugatePoints(scene.gray1,
+                            scene.gray2,
+                            scene.keypoints1,
+                            scene.keypoints2,
+                            options,
+                            &matches);
   EXPECT_GE(report.NumRejected(), 1);
   ASSERT_EQ(matches.matches.rows(), 60);
   // Left where correlation put it, for the relative orientation to judge.
@@ -162,9 +176,13 @@ TEST(ConjugateRefinement, PropagationMatchesTheOtherKeypoints) {
   const Scene scene = MakeScene();
   PairMatches matches = StartingMatches(scene, 30, 0.5);
   ConjugateRefinementOptions options;
-  const ConjugateRefinementReport report = RefineConjugatePoints(
-      scene.gray1, scene.gray2, scene.keypoints1, scene.keypoints2, options,
-      &matches);
+  const ConjugateRefinementReport report =
+      RefineConjugatePoints(scene.gray1,
+                            scene.gray2,
+                            scene.keypoints1,
+                            scene.keypoints2,
+                            options,
+                            &matches);
   const int num_keypoints = static_cast<int>(scene.keypoints1.size());
   EXPECT_GE(report.num_propagated, (num_keypoints - 30) * 2 / 3)
       << "of " << num_keypoints - 30;

@@ -590,9 +590,7 @@ PairMatches MatchImagePatches(const ImagePatches& image1,
       continue;
     }
     kept.emplace_back(match.idx1, match.idx2);
-    result.reference_xy1.push_back(
-        PixelOf(image1.xy[match.idx1]).cast<double>() +
-        Eigen::Vector2d(0.5, 0.5));
+    result.reference_xy1.push_back(PixelCentreOf(image1.xy[match.idx1]));
     result.refined_xy2.push_back(xy2);
     result.ncc.push_back(ncc);
   }

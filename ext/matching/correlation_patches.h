@@ -97,6 +97,12 @@ inline Eigen::Vector2i PixelOf(const Eigen::Vector2d& xy) {
                          static_cast<int>(std::floor(xy.y())));
 }
 
+// The centre of that pixel: where the windows of a keypoint are centred, and
+// so the reference point of its conjugate.
+inline Eigen::Vector2d PixelCentreOf(const Eigen::Vector2d& xy) {
+  return PixelOf(xy).cast<double>() + Eigen::Vector2d(0.5, 0.5);
+}
+
 // In-plane rotation by quarter turns, in pixel coordinates (x right, y
 // down): RotationQuarter(r) * (u, v) rotates by r * 90 degrees, i.e.
 // (u, v) -> (-v, u) for r = 1.

@@ -187,8 +187,8 @@ void LogPair(const MatchingOptions& options, const PairMatchReport& report) {
          << " candidates, " << report.num_relaxed << " after relaxation, ";
     if (options.lsm_refinement) {
       line << report.num_lsm_rejected << " not refined by LSM (median move "
-           << report.lsm_median_shift_px << " px), "
-           << report.num_propagated << " propagated, ";
+           << report.lsm_median_shift_px << " px), " << report.num_propagated
+           << " propagated, ";
     }
     line << report.num_matches << " matches, " << report.seconds << " s";
     if (!report.written) line << " -- not written: " << report.reason;
