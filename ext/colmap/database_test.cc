@@ -2,6 +2,8 @@
 #include "ext/colmap/database.h"
 
 #include "ext/colmap/bayon_tables.h"
+#include "ext/colmap/sqlite.h"
+#include "ext/colmap/table_matches.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 
@@ -173,6 +175,40 @@ TEST(BayonTables, CascadeWithImagesAndKeepUserVersion) {
   db.connection()->Execute("DELETE FROM cameras");
   EXPECT_FALSE(ReadCalibration(&db, camera_id));
   EXPECT_EQ(db.UserVersion(), 3800);
+}
+
+TEST(BayonTables, MatchRecordsKeepTheirStandardDeviations) {
+  const std::string dir = testing::TempDir("bayon_tables_matches");
+  Database db(dir + "/db.db", Database::Mode::kCreate);
+  const camera_t camera_id = db.WriteCamera(TestCamera());
+  const image_t a =
+      db.WriteImage(DatabaseImage{kInvalidImageId, "a.png", camera_id, {}, {}});
+  const image_t b =
+      db.WriteImage(DatabaseImage{kInvalidImageId, "b.png", camera_id, {}, {}});
+  MatchRecord record;
+  record.xy1 = {Eigen::Vector2f(1.5f, 2.5f), Eigen::Vector2f(3.5f, 4.5f)};
+  record.xy2 = {Eigen::Vector2f(5.25f, 6.75f), Eigen::Vector2f(7.f, 8.f)};
+  record.ncc = {0.9f, 0.8f};
+  record.sigma_px = {0.1f, 0.3f};
+  WriteMatchRecord(&db, a, b, record);
+  const std::optional<MatchRecord> read = ReadMatchRecord(&db, a, b);
+  ASSERT_TRUE(read);
+  EXPECT_EQ(read->xy2[0], record.xy2[0]);
+  EXPECT_EQ(read->ncc, record.ncc);
+  EXPECT_EQ(read->sigma_px, record.sigma_px);
+  // A row written before the standard deviations were kept (five floats
+  // per match) still reads, without them.
+  const std::vector<float> old_points = {
+      1.5f, 2.5f, 5.25f, 6.75f, 0.9f, 3.5f, 4.5f, 7.f, 8.f, 0.8f};
+  SqliteStatement update(db.connection(),
+                         "UPDATE bayon_matches SET points = ?");
+  update.BindBlob(1, old_points.data(), old_points.size() * sizeof(float));
+  update.Execute();
+  const std::optional<MatchRecord> old = ReadMatchRecord(&db, a, b);
+  ASSERT_TRUE(old);
+  EXPECT_EQ(old->xy2[1], record.xy2[1]);
+  EXPECT_EQ(old->ncc, record.ncc);
+  EXPECT_TRUE(old->sigma_px.empty());
 }
 
 TEST(BayonTables, BrownBeyerCameraGoesToCamerasAsItsFit) {

@@ -23,8 +23,10 @@ const BayonTable kMatchesTable = {
 
 namespace {
 
-// Per row: x1, y1, x2, y2, ncc as float32.
-constexpr int kFloatsPerRow = 5;
+// Per row: x1, y1, x2, y2, ncc, sigma_px as float32; rows written before
+// sigma_px was kept have the first five (the blob's size tells them apart).
+constexpr int kFloatsPerRow = 6;
+constexpr int kFloatsPerOldRow = 5;
 
 }  // namespace
 
@@ -43,6 +45,7 @@ void WriteMatchRecord(Database* database,
   const size_t rows = record.xy1.size();
   CHECK_EQ(record.xy2.size(), rows);
   CHECK_EQ(record.ncc.size(), rows);
+  CHECK(record.sigma_px.empty() || record.sigma_px.size() == rows);
   std::vector<float> points(rows * kFloatsPerRow);
   for (size_t i = 0; i < rows; ++i) {
     float* row = &points[i * kFloatsPerRow];
@@ -51,6 +54,7 @@ void WriteMatchRecord(Database* database,
     row[2] = record.xy2[i].x();
     row[3] = record.xy2[i].y();
     row[4] = record.ncc[i];
+    row[5] = record.sigma_px.empty() ? 0.f : record.sigma_px[i];
   }
   double affine[6];
   Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> affine_map(affine);
@@ -106,8 +110,14 @@ std::optional<MatchRecord> ReadMatchRecord(Database* database,
   record.num_candidates = static_cast<int>(statement.ColumnInt64(3));
   record.seconds = statement.ColumnDouble(4);
   const int64_t rows = statement.ColumnInt64(5);
-  if (rows < 0 || statement.ColumnBytes(6) !=
-                      static_cast<int>(rows * kFloatsPerRow * sizeof(float))) {
+  const int64_t bytes = statement.ColumnBytes(6);
+  const int per_row =
+      rows > 0 && bytes == static_cast<int64_t>(rows * kFloatsPerOldRow *
+                                                sizeof(float))
+          ? kFloatsPerOldRow
+          : kFloatsPerRow;
+  if (rows < 0 ||
+      bytes != static_cast<int64_t>(rows * per_row * sizeof(float))) {
     ThrowInputError(database->path(),
                     ": bayon_matches row of pair (",
                     image_id1,
@@ -117,17 +127,18 @@ std::optional<MatchRecord> ReadMatchRecord(Database* database,
                     rows,
                     " rows");
   }
-  std::vector<float> points(rows * kFloatsPerRow);
+  std::vector<float> points(rows * per_row);
   if (rows > 0) {
     std::memcpy(points.data(),
                 statement.ColumnBlobData(6),
                 points.size() * sizeof(float));
   }
   for (int64_t i = 0; i < rows; ++i) {
-    const float* row = &points[i * kFloatsPerRow];
+    const float* row = &points[i * per_row];
     record.xy1.emplace_back(row[0], row[1]);
     record.xy2.emplace_back(row[2], row[3]);
     record.ncc.push_back(row[4]);
+    if (per_row == kFloatsPerRow) record.sigma_px.push_back(row[5]);
   }
   return record;
 }

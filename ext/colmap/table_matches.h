@@ -4,7 +4,8 @@
 // `matches` row (which holds the keypoint indices): the in-plane rotation
 // and approximate mapping between the images, and for every match row the
 // sub-pixel conjugate points (the image-1 reference point and its conjugate
-// in image 2, COLMAP pixel coordinates) with their correlation coefficient.
+// in image 2, COLMAP pixel coordinates) with their correlation coefficient
+// and the standard deviation of the conjugate.
 // Stored in COLMAP's canonical order (image_id1 < image_id2), row for row
 // with the `matches` row; a record whose row count differs from it is stale
 // and ignored by readers.
@@ -32,6 +33,11 @@ struct MatchRecord {
   std::vector<Eigen::Vector2f> xy1;
   std::vector<Eigen::Vector2f> xy2;
   std::vector<float> ncc;
+  // Standard deviation of the image-2 position, pixels: least-squares
+  // matching's where it refined the point, the matcher's nominal one for a
+  // correlation peak. Empty in records written before bayon kept it (their
+  // points count as equally precise).
+  std::vector<float> sigma_px;
 };
 
 extern const BayonTable kMatchesTable;

@@ -23,6 +23,10 @@ void ConjugateRefinementOptions::Check() const {
               "ConjugateRefinementOptions.neighbor_fraction",
               "in (0, 1]",
               neighbor_fraction);
+  CheckOption(refined_sigma_px > 0,
+              "ConjugateRefinementOptions.refined_sigma_px",
+              "> 0",
+              refined_sigma_px);
   CheckOption(propagation_rounds >= 0,
               "ConjugateRefinementOptions.propagation_rounds",
               ">= 0",
@@ -236,6 +240,7 @@ int Propagate(const cv::Mat& gray1,
         PixelCentreOf(keypoints1[accepted[k].idx1]));
     matches->refined_xy2.push_back(accepted[k].xy2);
     matches->ncc.push_back(accepted[k].correlation);
+    matches->sigma_px.push_back(static_cast<float>(options.refined_sigma_px));
   }
   matches->matches = std::move(rows);
   return static_cast<int>(accepted.size());
@@ -280,6 +285,7 @@ ConjugateRefinementReport RefineConjugatePoints(
     shifts.push_back((refined.refined_xy - matches->refined_xy2[k]).norm());
     matches->refined_xy2[k] = refined.refined_xy;
     matches->ncc[k] = static_cast<float>(refined.correlation);
+    matches->sigma_px[k] = static_cast<float>(options.refined_sigma_px);
     kept.push_back(k);
   }
   report.num_refined = static_cast<int>(shifts.size());
@@ -290,11 +296,13 @@ ConjugateRefinementReport RefineConjugatePoints(
     matches->reference_xy1[k] = matches->reference_xy1[kept[k]];
     matches->refined_xy2[k] = matches->refined_xy2[kept[k]];
     matches->ncc[k] = matches->ncc[kept[k]];
+    matches->sigma_px[k] = matches->sigma_px[kept[k]];
   }
   matches->matches = std::move(rows);
   matches->reference_xy1.resize(kept.size());
   matches->refined_xy2.resize(kept.size());
   matches->ncc.resize(kept.size());
+  matches->sigma_px.resize(kept.size());
   for (int round = 0; round < options.propagation_rounds; ++round) {
     const int added =
         Propagate(gray1, gray2, keypoints1, keypoints2, options, matches);

@@ -71,6 +71,7 @@ PairMatches StartingMatches(const Scene& scene, int count, double error_px) {
     matches.refined_xy2.push_back(scene.conjugates[i] +
                                   Eigen::Vector2d(error(rng), error(rng)));
     matches.ncc.push_back(0.9f);
+    matches.sigma_px.push_back(0.3f);
   }
   return matches;
 }

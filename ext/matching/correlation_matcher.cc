@@ -58,6 +58,10 @@ void CorrelationMatchingOptions::Check() const {
               "CorrelationMatchingOptions.num_passes",
               ">= 1",
               num_passes);
+  CheckOption(peak_sigma_px > 0,
+              "CorrelationMatchingOptions.peak_sigma_px",
+              "> 0",
+              peak_sigma_px);
   relaxation.Check();
 }
 
@@ -593,6 +597,7 @@ PairMatches MatchImagePatches(const ImagePatches& image1,
     result.reference_xy1.push_back(PixelCentreOf(image1.xy[match.idx1]));
     result.refined_xy2.push_back(xy2);
     result.ncc.push_back(ncc);
+    result.sigma_px.push_back(static_cast<float>(options.peak_sigma_px));
   }
   result.matches.resize(kept.size(), 2);
   for (size_t k = 0; k < kept.size(); ++k) {

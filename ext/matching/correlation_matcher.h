@@ -74,6 +74,11 @@ struct CorrelationMatchingOptions {
   // match itself was accepted on the 7 x 7 window with min_ncc; the wider
   // window is less similar between convergent views).
   double refine_min_ncc = 0.5;
+  // Standard deviation of a correlation peak's position, pixels, as the
+  // relative orientation weighs it against least-squares points
+  // (conjugate_refinement.h): the sigma0 of relative orientations from peaks
+  // alone is 0.2 - 0.35 px on the rendered tower and the temple ring.
+  double peak_sigma_px = 0.3;
 
   // Global mapping: try all four quarter turns (else upright only).
   bool detect_rotation = true;
@@ -122,11 +127,12 @@ struct PairMatches {
   int num_passes = 1;      // passes that improved the result
   // Conjugate points: keypoint indices; the reference point in image 1 (the
   // centre of the keypoint's pixel) and the sub-pixel position of its
-  // conjugate in image 2, with their correlation.
+  // conjugate in image 2, with their correlation and its standard deviation.
   FeatureMatches matches;
   std::vector<Eigen::Vector2d> reference_xy1;
   std::vector<Eigen::Vector2d> refined_xy2;
   std::vector<float> ncc;
+  std::vector<float> sigma_px;  // of refined_xy2
 };
 
 GlobalMapping EstimateGlobalMapping(const ImagePatches& image1,

@@ -170,6 +170,7 @@ void WritePair(Database* database,
     record.xy1.push_back(job.matches.reference_xy1[k].cast<float>());
     record.xy2.push_back(job.matches.refined_xy2[k].cast<float>());
     record.ncc.push_back(job.matches.ncc[k]);
+    record.sigma_px.push_back(job.matches.sigma_px[k]);
   }
   WriteMatchRecord(database, report.image_id1, report.image_id2, record);
 }

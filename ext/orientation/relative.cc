@@ -27,6 +27,8 @@ ConjugatePoints PairConjugatePoints(const FeatureKeypoints& keypoints1,
                                     std::vector<int>* rows) {
   const bool subpixel =
       record && record->xy1.size() == static_cast<size_t>(matches.rows());
+  const bool weighted =
+      subpixel && record->sigma_px.size() == record->xy1.size();
   ConjugatePoints points;
   rows->clear();
   for (int row = 0; row < matches.rows(); ++row) {
@@ -44,6 +46,7 @@ ConjugatePoints PairConjugatePoints(const FeatureKeypoints& keypoints1,
     points.u2.push_back(u2);
     points.pixel1.push_back(pixel1);
     points.pixel2.push_back(pixel2);
+    if (weighted) points.sigma.push_back(record->sigma_px[row]);
     rows->push_back(row);
   }
   return points;

@@ -3,7 +3,8 @@
 // `bayon relative`: the relative orientation (relative_orientation.h) of
 // every matched image pair of a COLMAP database, from COLMAP's matches (and
 // the sub-pixel conjugate points of bayon_matches where `bayon match` wrote
-// them), with each image's interior orientation (image_vectors.h).
+// them, each point weighted by its standard deviation there), with each
+// image's interior orientation (image_vectors.h).
 //
 // Written per oriented pair: COLMAP's two_view_geometries row (the inlier
 // matches, E and F, config CALIBRATED where both focal lengths are known

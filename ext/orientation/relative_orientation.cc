@@ -117,6 +117,11 @@ Eigen::Vector2d RayScales(const Eigen::Vector3d& d1,
   return normal.inverse() * rhs;
 }
 
+// s_i: point i's standard deviation relative to the typical point's.
+double RelativeSigma(const ConjugatePoints& points, int i) {
+  return points.sigma.empty() ? 1.0 : points.sigma[i];
+}
+
 struct Adjustment {
   bool converged = false;
   int iterations = 0;
@@ -126,14 +131,16 @@ struct Adjustment {
 
 // Gauss-Helmert adjustment of (R, b) with the coplanarity condition
 // F = b . (u1 x R u2) = 0 in the observations x1, y1, x2, y2 of the points
-// with mask 1 (unit weights, pixels).
-Adjustment RefineElements(const std::vector<Eigen::Vector3d>& u1,
-                          const std::vector<Eigen::Vector3d>& u2,
+// with mask 1 (pixels; each point's four coordinates with the cofactor
+// s_i^2 of its relative standard deviation, 1 where none is given).
+Adjustment RefineElements(const ConjugatePoints& points,
                           const std::vector<uint8_t>& mask,
                           int max_iterations,
                           Eigen::Matrix3d* R,
                           Eigen::Vector3d* b) {
   Adjustment result;
+  const std::vector<Eigen::Vector3d>& u1 = points.u1;
+  const std::vector<Eigen::Vector3d>& u2 = points.u2;
   std::vector<int> used;
   for (size_t i = 0; i < u1.size(); ++i) {
     if (mask[i]) used.push_back(static_cast<int>(i));
@@ -150,9 +157,10 @@ Adjustment RefineElements(const std::vector<Eigen::Vector3d>& u1,
     Eigen::Matrix<double, 5, 1> rhs = Eigen::Matrix<double, 5, 1>::Zero();
     std::vector<Eigen::Matrix<double, 1, 5>> A(n);
     std::vector<Eigen::Vector4d> B(n);
-    std::vector<double> w(n), q(n);
+    std::vector<double> w(n), q(n), cofactor(n);
     for (int k = 0; k < n; ++k) {
       const int i = used[k];
+      cofactor[k] = RelativeSigma(points, i) * RelativeSigma(points, i);
       const Eigen::Vector3d a1 = u1[i] + Eigen::Vector3d(v[k](0), v[k](1), 0);
       const Eigen::Vector3d a2 = u2[i] + Eigen::Vector3d(v[k](2), v[k](3), 0);
       const Eigen::Vector3d r2 = *R * a2;
@@ -168,7 +176,8 @@ Adjustment RefineElements(const std::vector<Eigen::Vector3d>& u1,
       A[k](4) = e2.dot(a1_x_r2);
       // Misclosure against the original observations.
       w[k] = F - B[k].dot(v[k]);
-      q[k] = B[k].squaredNorm();
+      // The condition's cofactor: s_i^2 B B^T.
+      q[k] = cofactor[k] * B[k].squaredNorm();
       if (q[k] <= 0) return result;
       N += A[k].transpose() * A[k] / q[k];
       rhs += A[k].transpose() * w[k] / q[k];
@@ -177,16 +186,16 @@ Adjustment RefineElements(const std::vector<Eigen::Vector3d>& u1,
     if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return result;
     const Eigen::Matrix<double, 5, 1> dx = -ldlt.solve(rhs);
     if (!dx.allFinite()) return result;
-    double vtv = 0;
+    double vtpv = 0;
     for (int k = 0; k < n; ++k) {
       const double kk = -(A[k].dot(dx) + w[k]) / q[k];
-      v[k] = B[k] * kk;
-      vtv += v[k].squaredNorm();
+      v[k] = cofactor[k] * B[k] * kk;
+      vtpv += v[k].squaredNorm() / cofactor[k];
     }
     *R = *R * ExpRotation(dx.head<3>());
     *b = (*b + dx(3) * e1 + dx(4) * e2).normalized();
     result.iterations = iteration + 1;
-    result.sigma0 = std::sqrt(vtv / (n - 5));
+    result.sigma0 = std::sqrt(vtpv / (n - 5));
     // Steps of 1e-10 rad move an image point by 1e-7 px.
     if (dx.norm() < 1e-10) {
       result.converged = true;
@@ -431,13 +440,24 @@ void DrawSpreadSample(const std::vector<std::vector<int>>& buckets,
   }
 }
 
+// r_i / s_i: the residuals of points of different precision on one scale,
+// that of the typical point (pixels).
+std::vector<double> StandardizedResiduals(const Eigen::Matrix3d& M,
+                                          const ConjugatePoints& points,
+                                          DrtResidual type) {
+  std::vector<double> residuals = DrtResiduals(M, points.u1, points.u2, type);
+  for (size_t i = 0; i < residuals.size(); ++i) {
+    residuals[i] /= RelativeSigma(points, static_cast<int>(i));
+  }
+  return residuals;
+}
+
 // The median of the squared residuals of M over all points (eq. 2).
 double MedianOfSquares(const Eigen::Matrix3d& M,
                        const ConjugatePoints& points,
                        DrtResidual type,
                        std::vector<double>* squared) {
-  const std::vector<double> residuals =
-      DrtResiduals(M, points.u1, points.u2, type);
+  const std::vector<double> residuals = StandardizedResiduals(M, points, type);
   squared->resize(residuals.size());
   for (size_t i = 0; i < residuals.size(); ++i) {
     (*squared)[i] = residuals[i] * residuals[i];
@@ -495,7 +515,7 @@ std::vector<LmedsCandidate> LeastMedianOfSquares(
   for (const auto& [median, M] : leaders) {
     const double sigma = 1.48 * (1.0 + 5.0 / (n - 8)) * std::sqrt(median);
     const std::vector<double> residuals =
-        DrtResiduals(M, points.u1, points.u2, options.residual);
+        StandardizedResiduals(M, points, options.residual);
     std::vector<uint8_t> mask(n);
     for (int i = 0; i < n; ++i) {
       mask[i] =
@@ -542,7 +562,7 @@ Eigen::Matrix3d WeightedDrt(const ConjugatePoints& points,
                             const Eigen::Matrix3d& lmeds_M) {
   const auto cost = [&](const Eigen::Matrix3d& M) {
     const std::vector<double> residuals =
-        DrtResiduals(M, points.u1, points.u2, DrtResidual::kSampson);
+        StandardizedResiduals(M, points, DrtResidual::kSampson);
     double sum = 0;
     for (size_t i = 0; i < residuals.size(); ++i) {
       if (mask[i]) sum += residuals[i] * residuals[i];
@@ -563,8 +583,9 @@ Eigen::Matrix3d WeightedDrt(const ConjugatePoints& points,
       const Eigen::Vector3d a1 = points.u1[i] / std::abs(points.u1[i].z());
       const Eigen::Vector3d a2 = points.u2[i] / std::abs(points.u2[i].z());
       const Eigen::Vector3d g1 = M * a2, g2 = M.transpose() * a1;
+      const double s_i = RelativeSigma(points, static_cast<int>(i));
       const double variance =
-          g1.head<2>().squaredNorm() + g2.head<2>().squaredNorm();
+          s_i * s_i * (g1.head<2>().squaredNorm() + g2.head<2>().squaredNorm());
       weights[i] = variance > 0 ? 1.0 / variance : 0.0;
     }
     if (!SolveDrtLinear(
@@ -669,18 +690,17 @@ Solution SolveFromCandidate(const ConjugatePoints& points,
                             const LmedsCandidate& candidate) {
   Solution solution;
   solution.sigma = LmedsSigma(candidate.median, points.size(), options);
-  solution.mask = Classify(
-      DrtResiduals(candidate.M, points.u1, points.u2, options.residual),
-      solution.sigma,
-      options.blunder_threshold);
+  solution.mask =
+      Classify(StandardizedResiduals(candidate.M, points, options.residual),
+               solution.sigma,
+               options.blunder_threshold);
   const Eigen::Matrix3d M =
       WeightedDrt(points, solution.mask, options, candidate.M);
   DecomposeDrt(
       M, points.u1, points.u2, solution.mask, &solution.R, &solution.b);
   for (int round = 0; round < options.max_rounds; ++round) {
     solution.num_rounds = round + 1;
-    solution.adjustment = RefineElements(points.u1,
-                                         points.u2,
+    solution.adjustment = RefineElements(points,
                                          solution.mask,
                                          options.max_iterations,
                                          &solution.R,
@@ -689,7 +709,7 @@ Solution SolveFromCandidate(const ConjugatePoints& points,
     const Eigen::Matrix3d refined =
         (Skew(solution.b) * solution.R).normalized();
     const std::vector<double> residuals =
-        DrtResiduals(refined, points.u1, points.u2, options.residual);
+        StandardizedResiduals(refined, points, options.residual);
     solution.sigma = std::max(options.min_sigma_px, RobustSigma(residuals, 5));
     std::vector<uint8_t> next =
         Classify(residuals, solution.sigma, options.blunder_threshold);
@@ -701,8 +721,7 @@ Solution SolveFromCandidate(const ConjugatePoints& points,
   ResolveChirality(points, solution.mask, &solution.R, &solution.b);
   if (!solution.R.isApprox(R)) {
     // The covariance belongs to the parameterisation at the new solution.
-    solution.adjustment = RefineElements(points.u1,
-                                         points.u2,
+    solution.adjustment = RefineElements(points,
                                          solution.mask,
                                          options.max_iterations,
                                          &solution.R,
@@ -812,11 +831,33 @@ RelativeOrientation Finish(const ConjugatePoints& points,
   return result;
 }
 
+// The points with their standard deviations divided by the median one
+// (each at least min_sigma_px first), so that residuals, sigma0 and every
+// threshold in pixels refer to the typical point; none where any point
+// lacks one.
+ConjugatePoints WithRelativeSigma(const ConjugatePoints& input,
+                                  double min_sigma_px) {
+  ConjugatePoints points = input;
+  const bool known = points.sigma.size() == points.u1.size() &&
+                     std::all_of(points.sigma.begin(),
+                                 points.sigma.end(),
+                                 [](double s) { return s > 0; });
+  if (!known) {
+    points.sigma.clear();
+    return points;
+  }
+  for (double& s : points.sigma) s = std::max(s, min_sigma_px);
+  const double median = Median(points.sigma);
+  for (double& s : points.sigma) s /= median;
+  return points;
+}
+
 }  // namespace
 
 RelativeOrientation EstimateRelativeOrientation(
-    const ConjugatePoints& points, const RelativeOrientationOptions& options) {
+    const ConjugatePoints& input, const RelativeOrientationOptions& options) {
   options.Check();
+  const ConjugatePoints points = WithRelativeSigma(input, options.min_sigma_px);
   RelativeOrientation result;
   const int n = points.size();
   if (n < options.min_num_points) {
@@ -845,8 +886,7 @@ RelativeOrientation EstimateRelativeOrientation(
   {
     const double sigma = LmedsSigma(candidates.front().median, n, options);
     const std::vector<uint8_t> mask = Classify(
-        DrtResiduals(
-            candidates.front().M, points.u1, points.u2, options.residual),
+        StandardizedResiduals(candidates.front().M, points, options.residual),
         sigma,
         options.blunder_threshold);
     if (NoBase(points, mask, options.min_parallax_px, &result)) return result;

@@ -63,6 +63,15 @@
 // Sampson distance, in pixels), so that one threshold fits the whole image; the
 // paper's plain misclosure is available as DrtResidual::kAlgebraic.
 //
+// Points of different precision. Where the points carry standard
+// deviations, each is divided by their median (after raising it to
+// min_sigma_px): s_i, the point's precision relative to the typical point.
+// Every residual above (eq. 2's median, the blunder test, the weighted
+// solution) is then r_i / s_i, and the rigorous refinement gives each
+// point's coordinates the cofactor s_i^2. sigma0, the robust sigma and the
+// pixel thresholds thus refer to a point of the median precision; without
+// standard deviations (s_i = 1) everything is as the paper has it.
+//
 // Rigorous refinement. The five elements (R: three angles; b: two angles on
 // the unit sphere) are adjusted by least squares with the coplanarity
 // condition as a condition equation between observations and unknowns
@@ -96,6 +105,11 @@ struct ConjugatePoints {
   // pure rotation in the report.
   std::vector<Eigen::Vector2d> pixel1;
   std::vector<Eigen::Vector2d> pixel2;
+  // Optional: each point's standard deviation (pixels, both images alike),
+  // e.g. least-squares matching's for refined points and a nominal one for
+  // correlation peaks. The points are then weighted by them (see the
+  // header comment); empty, or any value <= 0: all equally precise.
+  std::vector<double> sigma;
   int size() const { return static_cast<int>(u1.size()); }
 };
 

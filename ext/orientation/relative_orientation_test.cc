@@ -147,6 +147,57 @@ TEST(RelativeOrientation, NoisyPointsStayWithinTheirStandardDeviations) {
   EXPECT_LT(result.num_blunders, 300 * 0.03);
 }
 
+// Points of two precisions (least-squares points and correlation peaks, as
+// `bayon match --lsm_refinement 1 --lsm_keep_unrefined 1` gives them): with
+// their standard deviations the imprecise ones count by theirs instead of
+// being taken for blunders, and the precise ones set sigma0.
+TEST(RelativeOrientation, PointsAreWeightedByTheirStandardDeviations) {
+  constexpr int kPrecise = 240, kImprecise = 160;
+  Synthetic pair = MakePair(kPrecise + kImprecise, 0.05, 0.0, 11);
+  std::mt19937 rng(12);
+  std::normal_distribution<double> noise(0, 1.0);
+  for (int i = 0; i < kPrecise + kImprecise; ++i) {
+    double sigma = 0.05;
+    if (i >= kPrecise) {
+      sigma = 1.0;
+      const Eigen::Vector2d shift(noise(rng), noise(rng));
+      pair.points.pixel2[i] += shift;
+      pair.points.u2[i] = ImageVector(pair.points.pixel2[i]);
+    }
+    pair.points.sigma.push_back(sigma);
+  }
+  const RelativeOrientation weighted =
+      EstimateRelativeOrientation(pair.points, RelativeOrientationOptions());
+  ASSERT_TRUE(weighted.success) << weighted.reason;
+  ConjugatePoints unweighted_points = pair.points;
+  unweighted_points.sigma.clear();
+  const RelativeOrientation unweighted = EstimateRelativeOrientation(
+      unweighted_points, RelativeOrientationOptions());
+  ASSERT_TRUE(unweighted.success) << unweighted.reason;
+  // Without weights most imprecise points fail the blunder test (the robust
+  // sigma is the precise points'); with them nearly all take part.
+  EXPECT_GT(unweighted.num_blunders, kImprecise / 2);
+  EXPECT_LT(weighted.num_blunders, (kPrecise + kImprecise) / 30);
+  // sigma0 is the typical (median, precise) point's.
+  EXPECT_GT(weighted.sigma0_px, 0.03);
+  EXPECT_LT(weighted.sigma0_px, 0.07);
+  const Rigid3d estimate = weighted.Cam2FromCam1();
+  EXPECT_LT(RotationErrorDeg(estimate, pair.cam2_from_cam1),
+            4 * weighted.std_omega_phi_kappa_deg.norm());
+  EXPECT_LT(BaseErrorDeg(estimate, pair.cam2_from_cam1),
+            4 * weighted.std_base_deg.norm());
+
+  // Equal standard deviations change nothing.
+  ConjugatePoints equal = unweighted_points;
+  equal.sigma.assign(equal.size(), 0.3);
+  const RelativeOrientation same =
+      EstimateRelativeOrientation(equal, RelativeOrientationOptions());
+  EXPECT_EQ(same.num_inliers, unweighted.num_inliers);
+  EXPECT_NEAR(same.sigma0_px, unweighted.sigma0_px, 1e-12);
+  EXPECT_LT(RotationErrorDeg(same.Cam2FromCam1(), unweighted.Cam2FromCam1()),
+            1e-9);
+}
+
 // The paper: "the epipolar geometry can be robustly recovered from the
 // matching results containing 5 - 40% blunders using the LMedS method".
 // 0.2 px noise: sub-pixel conjugate points as `bayon match` gives them.
