@@ -4,7 +4,10 @@
 # 2832 x 2128), in the same run, on the CPU:
 #   bayon:  import (one camera, EXIF focal length), features (Moravec),
 #           match --pairing exhaustive (correlation + relaxation),
-#           relative (DRT + LMedS + coplanarity adjustment)
+#           relative (DRT + LMedS + coplanarity adjustment); and match +
+#           relative again on a copy of the features with the conjugate
+#           points refined and propagated by least-squares matching
+#           (--lsm_refinement 1)
 #   COLMAP: feature_extractor (SIFT, one camera) and exhaustive_matcher
 #           (matching and geometric verification)
 # Wall time and peak memory per stage (/usr/bin/time -v), the totals and
@@ -60,9 +63,15 @@ bdb="$dir/bayon/database.db"
 "$BAYON" import --image_path "$images" --database_path "$bdb" --single_camera 1 \
   --log_path "$dir/bayon/import.log" >/dev/null
 run bayon_features "$BAYON" features --database_path "$bdb" --image_path "$images"
+ldb="$dir/bayon/lsm.db"
+cp "$bdb" "$ldb"
 run bayon_match "$BAYON" match --database_path "$bdb" --image_path "$images" \
   --pairing exhaustive
 run bayon_relative "$BAYON" relative --database_path "$bdb"
+run bayon_lsm_match "$BAYON" match --database_path "$ldb" --image_path "$images" \
+  --pairing exhaustive --lsm_refinement 1 --log_path "$dir/bayon/lsm_match.log"
+run bayon_lsm_relative "$BAYON" relative --database_path "$ldb" \
+  --log_path "$dir/bayon/lsm_relative.log"
 
 # --- COLMAP
 cdb="$dir/colmap/database.db"
@@ -72,6 +81,7 @@ run colmap_match colmap exhaustive_matcher --database_path "$cdb" \
   --SiftMatching.use_gpu 0
 
 read -r b_kp b_pairs b_matches b_verified b_inliers < <(counts "$bdb")
+read -r l_kp l_pairs l_matches l_verified l_inliers < <(counts "$ldb")
 read -r c_kp c_pairs c_matches c_verified c_inliers < <(counts "$cdb")
 row() {
   printf '%-34s %8.1f %8s\n' "$1" "$(wall "$2")" "$(peak_mb "$2")"
@@ -85,6 +95,7 @@ total() {
   echo "$t $m"
 }
 read -r b_total b_peak < <(total bayon_features bayon_match bayon_relative)
+read -r l_total l_peak < <(total bayon_features bayon_lsm_match bayon_lsm_relative)
 read -r c_total c_peak < <(total colmap_features colmap_match)
 
 echo "sceaux-castle: 11 images 2832 x 2128, all pairs, CPU ($(nproc) cores)"
@@ -93,16 +104,22 @@ row "bayon features (Moravec)" bayon_features
 row "bayon match (exhaustive)" bayon_match
 row "bayon relative (DRT, LMedS)" bayon_relative
 printf '%-34s %8.1f %8s\n' "bayon total" "$b_total" "$b_peak"
+row "bayon match --lsm_refinement 1" bayon_lsm_match
+row "bayon relative (LSM points)" bayon_lsm_relative
+printf '%-34s %8.1f %8s\n' "bayon total with LSM" "$l_total" "$l_peak"
 row "colmap feature_extractor (SIFT)" colmap_features
 row "colmap exhaustive_matcher" colmap_match
 printf '%-34s %8.1f %8s\n' "colmap total" "$c_total" "$c_peak"
-awk -v a="$b_total" -v b="$c_total" 'BEGIN {
-  printf "time ratio bayon / colmap: %.2f (%s)\n", a / b,
-         a < b ? "bayon faster" : "colmap faster" }'
+awk -v a="$b_total" -v l="$l_total" -v b="$c_total" 'BEGIN {
+  printf "time ratio bayon / colmap: %.2f (%s); with LSM %.2f (%s)\n", a / b,
+         a < b ? "bayon faster" : "colmap faster", l / b,
+         l < b ? "bayon faster" : "colmap faster" }'
 printf '%-8s %10s %13s %10s %15s %14s\n' "" "keypoints" "matched pairs" "matches" \
   "verified pairs" "inlier matches"
 printf '%-8s %10s %13s %10s %15s %14s\n' bayon "$b_kp" "$b_pairs" "$b_matches" \
   "$b_verified" "$b_inliers"
+printf '%-8s %10s %13s %10s %15s %14s\n' "bayon+L" "$l_kp" "$l_pairs" "$l_matches" \
+  "$l_verified" "$l_inliers"
 printf '%-8s %10s %13s %10s %15s %14s\n' colmap "$c_kp" "$c_pairs" "$c_matches" \
   "$c_verified" "$c_inliers"
 echo "outputs and logs in $dir"
