@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -76,6 +77,17 @@ PairMatches StartingMatches(const Scene& scene, int count, double error_px) {
   return matches;
 }
 
+ConjugateRefinementReport Refine(const Scene& scene,
+                                 const ConjugateRefinementOptions& options,
+                                 PairMatches* matches) {
+  return RefineConjugatePoints(scene.gray1,
+                               scene.gray2,
+                               scene.keypoints1,
+                               scene.keypoints2,
+                               options,
+                               matches);
+}
+
 double RmsError(const Scene& scene, const PairMatches& matches) {
   double sum = 0;
   for (size_t k = 0; k < matches.refined_xy2.size(); ++k) {
@@ -115,13 +127,7 @@ TEST(ConjugateRefinement, RemovesTheBiasOfTheCorrelationPeaks) {
   const double before = RmsError(scene, matches);
   ConjugateRefinementOptions options;
   options.propagation_rounds = 0;
-  const ConjugateRefinementReport report =
-      RefineConjugatePoints(scene.gray1,
-                            scene.gray2,
-                            scene.keypoints1,
-                            scene.keypoints2,
-                            options,
-                            &matches);
+  const ConjugateRefinementReport report = Refine(scene, options, &matches);
   EXPECT_GE(report.num_refined, 54);
   EXPECT_EQ(report.num_refined + report.NumRejected(), 60);
   EXPECT_EQ(matches.matches.rows(), report.num_refined);
@@ -137,12 +143,7 @@ TEST(ConjugateRefinement, DropsWrongConjugates) {
   for (int k : {5, 20, 41}) matches.refined_xy2[k] += Eigen::Vector2d(6, -5);
   ConjugateRefinementOptions options;
   options.propagation_rounds = 0;
-  RefineConjugatePoints(scene.gray1,
-                        scene.gray2,
-                        scene.keypoints1,
-                        scene.keypoints2,
-                        options,
-                        &matches);
+  Refine(scene, options, &matches);
   for (int k = 0; k < matches.matches.rows(); ++k) {
     EXPECT_LT((matches.refined_xy2[k] - scene.conjugates[matches.matches(k, 0)])
                   .norm(),
@@ -160,30 +161,25 @@ TEST(ConjugateRefinement, KeepsTheUnrefinedPeaksOnRequest) {
   ConjugateRefinementOptions options;
   options.propagation_rounds = 0;
   options.keep_unrefined = true;
-  const ConjugateRefinementReport report =
-      RefineConjugatePoints(scene.gray1,
-                            scene.gray2,
-                            scene.keypoints1,
-                            scene.keypoints2,
-                            options,
-                            &matches);
+  const ConjugateRefinementReport report = Refine(scene, options, &matches);
   EXPECT_GE(report.NumRejected(), 1);
   ASSERT_EQ(matches.matches.rows(), 60);
-  // Left where correlation put it, for the relative orientation to judge.
+  // Left where correlation put it, for the relative orientation to judge
+  // with the peaks' standard deviation; the refined ones carry theirs.
   EXPECT_EQ(matches.refined_xy2[20], wrong);
+  EXPECT_FLOAT_EQ(matches.sigma_px[20], 0.3f);
+  const float refined_sigma = static_cast<float>(options.refined_sigma_px);
+  EXPECT_EQ(
+      std::count(
+          matches.sigma_px.begin(), matches.sigma_px.end(), refined_sigma),
+      report.num_refined);
 }
 
 TEST(ConjugateRefinement, PropagationMatchesTheOtherKeypoints) {
   const Scene scene = MakeScene();
   PairMatches matches = StartingMatches(scene, 30, 0.5);
   ConjugateRefinementOptions options;
-  const ConjugateRefinementReport report =
-      RefineConjugatePoints(scene.gray1,
-                            scene.gray2,
-                            scene.keypoints1,
-                            scene.keypoints2,
-                            options,
-                            &matches);
+  const ConjugateRefinementReport report = Refine(scene, options, &matches);
   const int num_keypoints = static_cast<int>(scene.keypoints1.size());
   EXPECT_GE(report.num_propagated, (num_keypoints - 30) * 2 / 3)
       << "of " << num_keypoints - 30;
