@@ -25,7 +25,7 @@ void MatchingOptions::Check() const {
   pairing.Check();
   patches.Check();
   correlation.Check();
-  if (lsm_refinement) refinement.Check();
+  refinement.Check();
   const std::string shift_rule =
       StrCat("< patches.refine_radius (", patches.refine_radius, ")");
   CheckOption(correlation.max_keypoint_shift_px < patches.refine_radius,
