@@ -123,16 +123,12 @@ void MatchPair(const std::map<image_t, ImageData>& data,
   }
   job->matches = MatchImagePatches(image1, image2, options.correlation);
   if (options.lsm_refinement) {
-    const ConjugateRefinementReport refinement =
-        RefineConjugatePoints(data.at(report.image_id1).gray,
-                              data.at(report.image_id2).gray,
-                              image1.xy,
-                              image2.xy,
-                              options.refinement,
-                              &job->matches);
-    report.num_lsm_rejected = refinement.NumRejected();
-    report.lsm_median_shift_px = refinement.median_shift_px;
-    report.num_propagated = refinement.num_propagated;
+    report.refinement = RefineConjugatePoints(data.at(report.image_id1).gray,
+                                              data.at(report.image_id2).gray,
+                                              image1.xy,
+                                              image2.xy,
+                                              options.refinement,
+                                              &job->matches);
   }
   const PairMatches& matches = job->matches;
   report.rotation_deg = matches.mapping.RotationDeg();
@@ -187,9 +183,15 @@ void LogPair(const MatchingOptions& options, const PairMatchReport& report) {
          << report.mapping_inliers << " votes), " << report.num_candidates
          << " candidates, " << report.num_relaxed << " after relaxation, ";
     if (options.lsm_refinement) {
-      line << report.num_lsm_rejected << " not refined by LSM (median move "
-           << report.lsm_median_shift_px << " px), " << report.num_propagated
-           << " propagated, ";
+      const ConjugateRefinementReport& lsm = report.refinement;
+      line << lsm.NumRejected() << " not refined by LSM (";
+      for (int k = 0; k < kNumObservationOutcomes; ++k) {
+        if (lsm.num_rejected[k] == 0) continue;
+        line << ObservationOutcomeName(static_cast<ObservationOutcome>(k))
+             << " " << lsm.num_rejected[k] << ", ";
+      }
+      line << "median move " << lsm.median_shift_px << " px), "
+           << lsm.num_propagated << " propagated, ";
     }
     line << report.num_matches << " matches, " << report.seconds << " s";
     if (!report.written) line << " -- not written: " << report.reason;

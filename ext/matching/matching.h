@@ -56,11 +56,9 @@ struct PairMatchReport {
   int num_relaxed = 0;
   int num_matches = 0;
   // Least-squares refinement: matches it rejected (kept at their
-  // correlation peaks, or dropped), the median move from the peaks, and the
-  // matches propagation added.
-  int num_lsm_rejected = 0;
-  double lsm_median_shift_px = 0;
-  int num_propagated = 0;
+  // correlation peaks, or dropped) by reason, the median move from the
+  // peaks, and the matches propagation added.
+  ConjugateRefinementReport refinement;
   double seconds = 0;
 };
 
