@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# bayon's own chain from photographs to the bundle (import with the
+# calibrated camera, features, match, relative, disparity, tiepoints,
+# strip, adjust; free network) against stock COLMAP 3.8's (CPU SIFT,
+# exhaustive matching, mapper: scripts/bench/colmap_baseline.sh, run first
+# if its results are missing) on the two real rings with ground truth,
+# both judged by `bayon evaluate` against the truth of
+# `bayon import_ground_truth`:
+#  1. ../shared/data/temple-ring (16 x 640x480; all pairs matched);
+#  2. ../shared/data/fountain-P11 (11 x 3072x2048; 3 successors per image).
+# bayon is given the calibrated camera (interior orientation known, as the
+# paper's); COLMAP starts from f = 1.2 x the long side and refines it.
+#   scripts/bench.sh chain [SELF_CALIBRATION]   (none|significant|all;
+#                                                default none)
+# Outputs under $BAYON_BUILD/bench/chain; nothing is written into the data
+# folder. BAYON_THREADS (default 2) threads.
+set -euo pipefail
+dir="$BAYON_BUILD/bench/chain"
+baseline="$BAYON_BUILD/bench/colmap_baseline"
+data="$BAYON_DATA_DIR"
+threads="${BAYON_THREADS:-2}"
+self_calibration="${1:-none}"
+mkdir -p "$dir"
+
+if [ ! -f "$baseline/temple/evaluation.json" ] ||
+  [ ! -f "$baseline/fountain/evaluation.json" ]; then
+  echo "chain.sh: stock COLMAP first (scripts/bench/colmap_baseline.sh)"
+  bash "$(dirname "$0")/colmap_baseline.sh" >/dev/null
+fi
+
+# step LOG COMMAND...: the command's output to LOG.log, /usr/bin/time to
+# LOG.time.
+step() {
+  local log="$1"
+  shift
+  if ! /usr/bin/time -v -o "$log.time" "$@" >"$log.log" 2>&1; then
+    echo "failed: $*; see $log.log" >&2
+    return 1
+  fi
+}
+
+# chain NAME IMAGES FORMAT TRUTH_INPUT MATCH_ARGS...
+chain() {
+  local name="$1" images="$2" format="$3" truth_input="$4"
+  shift 4
+  local ws="$dir/$name" db="$dir/$name/database.db"
+  rm -rf "$ws"
+  mkdir -p "$ws"
+  local image_path_flag=()
+  [ "$format" = strecha ] && image_path_flag=(--image_path "$images")
+  "$BAYON" import_ground_truth --format "$format" --input_path "$truth_input" \
+    --output_path "$ws/truth" "${image_path_flag[@]}" >"$ws/truth.log" 2>&1
+  step "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
+    --single_camera 1 --camera_model PINHOLE
+  # The calibrated camera (the truth's, PINHOLE fx fy cx cy) as a known
+  # focal length.
+  local params
+  params=$(grep -v '^#' "$ws/truth/cameras.txt" | head -1 |
+    awk '{ print $5 "," $6 "," $7 "," $8 }')
+  python3 - "$db" "$params" <<'EOF'
+import sqlite3, struct, sys
+db, params = sys.argv[1], [float(v) for v in sys.argv[2].split(",")]
+with sqlite3.connect(db) as c:
+    c.execute("update cameras set params = ?, prior_focal_length = 1",
+              (struct.pack("<4d", *params),))
+EOF
+  step "$ws/features" "$BAYON" features --database_path "$db" \
+    --image_path "$images" --num_threads "$threads"
+  step "$ws/match" "$BAYON" match --database_path "$db" --image_path "$images" \
+    --num_threads "$threads" "$@"
+  step "$ws/relative" "$BAYON" relative --database_path "$db" \
+    --num_threads "$threads"
+  step "$ws/disparity" "$BAYON" disparity --database_path "$db" \
+    --num_threads "$threads"
+  step "$ws/tiepoints" "$BAYON" tiepoints --database_path "$db" \
+    --image_path "$images" --num_threads "$threads"
+  step "$ws/strip" "$BAYON" strip --database_path "$db" \
+    --output_path "$ws/initial" --num_threads "$threads"
+  step "$ws/adjust" "$BAYON" adjust --database_path "$db" \
+    --input_path "$ws/initial" --output_path "$ws/adjusted" --datum free \
+    --self_calibration "$self_calibration" --num_threads "$threads"
+  "$BAYON" evaluate --input_path "$ws/adjusted" --ground_truth_path \
+    "$ws/truth" --output_path "$ws/evaluation.json" --label "$name bayon" \
+    >"$ws/evaluate.log" 2>&1 || { cat "$ws/evaluate.log" >&2; return 1; }
+}
+
+chain temple "$data/temple-ring" middlebury \
+  "$data/temple-ring/templeSR_par.txt" --pairing exhaustive
+chain fountain "$data/fountain-P11/images" strecha \
+  "$data/fountain-P11/gt_dense_cameras" --pairing sequential --num_neighbors 3
+
+printf '\n%-9s %-7s %10s %10s %10s %10s %10s %8s %8s\n' set program \
+  registered "centre RMS" "centre max" "centre %" "rot RMS" time "peak"
+printf '%-9s %-7s %10s %10s %10s %10s %10s %8s %8s\n' "" "" "" mm mm "" deg s MB
+for name in temple fountain; do
+  python3 - "$dir/$name" "$baseline/$name" "$name" <<'EOF'
+import json, re, sys
+ws, base, name = sys.argv[1:4]
+def wall_and_peak(logs):
+    total, peak = 0.0, 0
+    for log in logs:
+        text = open(log + ".time").read()
+        clock = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)",
+                          text).group(1)
+        seconds = 0.0
+        for part in clock.split(":"):
+            seconds = seconds * 60 + float(part)
+        total += seconds
+        peak = max(peak, int(re.search(r"Maximum resident set size \(kbytes\): (\d+)",
+                                       text).group(1)))
+    return total, peak / 1024
+rows = [("bayon", ws, [ws + "/" + s for s in
+         ("features", "match", "relative", "disparity", "tiepoints", "strip",
+          "adjust")]),
+        ("colmap", base, [base + "/" + s for s in ("features", "matches", "mapper")])]
+for program, folder, logs in rows:
+    e = json.load(open(folder + "/evaluation.json"))["sparse"]
+    seconds, peak = wall_and_peak(logs)
+    print("%-9s %-7s %6d/%-3d %10.3f %10.3f %10.4f %10.4f %8.1f %8.0f"
+          % (name, program, e["num_registered"], e["num_truth_images"],
+             1000 * e["center_rms"], 1000 * e["center_max"],
+             100 * e["center_rms_relative"], e["rotation_rms_deg"], seconds, peak))
+EOF
+done
+echo
+echo "bayon: self-calibration $self_calibration, calibrated camera given;"
+echo "colmap: f from 1.2 x the long side, principal point fixed at the centre."
+echo "centre %: RMS centre error / mean camera-to-centroid distance, after the"
+echo "7-parameter similarity fitted by bayon evaluate. Time: the stages' wall"
+echo "clock summed; peak: the largest resident set of any stage."
+echo "outputs and logs in $dir"
