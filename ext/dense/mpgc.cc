@@ -1,0 +1,464 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/dense/mpgc.h"
+
+#include "ext/core/errors.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+
+namespace bayon {
+
+void MpgcOptions::Check() const {
+  lsm.Check();
+  CheckOption(grey_sigma > 0, "MpgcOptions.grey_sigma", "> 0", grey_sigma);
+  CheckOption(geometric_sigma_px > 0,
+              "MpgcOptions.geometric_sigma_px",
+              "> 0",
+              geometric_sigma_px);
+  CheckOption(max_iterations >= 1,
+              "MpgcOptions.max_iterations",
+              ">= 1",
+              max_iterations);
+  CheckOption(
+      convergence_px > 0, "MpgcOptions.convergence_px", "> 0", convergence_px);
+  CheckOption(
+      max_shift_px > 0, "MpgcOptions.max_shift_px", "> 0", max_shift_px);
+  CheckOption(min_correlation > -1 && min_correlation < 1,
+              "MpgcOptions.min_correlation",
+              "in (-1, 1)",
+              min_correlation);
+  CheckOption(min_search_views >= 1,
+              "MpgcOptions.min_search_views",
+              ">= 1",
+              min_search_views);
+}
+
+const char* MpgcStatusName(MpgcStatus status) {
+  switch (status) {
+    case MpgcStatus::kConverged:
+      return "converged";
+    case MpgcStatus::kOutsideImage:
+      return "outside_image";
+    case MpgcStatus::kFlatPatch:
+      return "flat_patch";
+    case MpgcStatus::kBehindCamera:
+      return "behind_camera";
+    case MpgcStatus::kTooFewViews:
+      return "too_few_views";
+    case MpgcStatus::kNotConverged:
+      return "not_converged";
+    case MpgcStatus::kSingular:
+      return "singular";
+  }
+  return "unknown";
+}
+
+namespace {
+
+bool Project(const MpgcView& view,
+             const Eigen::Vector3d& xyz,
+             Eigen::Vector2d* pixel) {
+  return view.camera->ImgFromCam(view.cam_from_world * xyz, pixel, view.frame);
+}
+
+// d pixel / d X by central differences (the camera model's distortion has
+// no closed-form derivative here); `step` in object units.
+bool ProjectionJacobian(const MpgcView& view,
+                        const Eigen::Vector3d& xyz,
+                        double step,
+                        Eigen::Matrix<double, 2, 3>* jacobian) {
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Vector3d plus = xyz, minus = xyz;
+    plus(k) += step;
+    minus(k) -= step;
+    Eigen::Vector2d p, m;
+    if (!Project(view, plus, &p) || !Project(view, minus, &m)) return false;
+    jacobian->col(k) = (p - m) / (2 * step);
+  }
+  return true;
+}
+
+// The ray of a master pixel, world frame: origin and unit direction.
+bool MasterRay(const MpgcView& master,
+               const Eigen::Vector2d& xy,
+               Eigen::Vector3d* origin,
+               Eigen::Vector3d* direction) {
+  Eigen::Vector3d ray;
+  if (!master.camera->CamFromImg(xy, &ray, master.frame)) return false;
+  const Eigen::Quaterniond world_from_cam =
+      master.cam_from_world.rotation.inverse();
+  *origin = master.cam_from_world.Center();
+  *direction = (world_from_cam * ray).normalized();
+  return true;
+}
+
+// The search patch's shape: how a plane through X facing the master maps
+// a master pixel step into the search image.
+bool InducedShape(const MpgcView& master,
+                  const Eigen::Vector2d& master_xy,
+                  const MpgcView& view,
+                  const Eigen::Vector3d& xyz,
+                  Eigen::Matrix2d* shape) {
+  Eigen::Vector3d origin, normal;
+  if (!MasterRay(master, master_xy, &origin, &normal)) return false;
+  // Where the master rays of the pixel and of its neighbours meet the
+  // plane, projected into the search image (X itself need not lie on the
+  // master ray: it is an approximation).
+  const auto on_plane = [&](const Eigen::Vector2d& xy, Eigen::Vector2d* pixel) {
+    Eigen::Vector3d o, d;
+    if (!MasterRay(master, xy, &o, &d)) return false;
+    const double denominator = d.dot(normal);
+    if (std::abs(denominator) < 1e-9) return false;
+    return Project(view, o + d * ((xyz - o).dot(normal) / denominator), pixel);
+  };
+  Eigen::Vector2d centre;
+  if (!on_plane(master_xy, &centre)) return false;
+  for (int k = 0; k < 2; ++k) {
+    Eigen::Vector2d moved;
+    if (!on_plane(master_xy + Eigen::Vector2d::Unit(k), &moved)) return false;
+    shape->col(k) = moved - centre;
+  }
+  return true;
+}
+
+struct PatchState {
+  int view = -1;  // index into `search`
+  LsmParameters params;
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  std::array<bool, kNumLsmParams> active{};
+  LsmNormalEquations equations;
+};
+
+// The normal equations of all observations at (xyz, patches); false where a
+// patch or projection fails (the culprit in *failed, -1 for the master).
+struct System {
+  Eigen::MatrixXd N;
+  Eigen::VectorXd rhs;
+  double cost = 0;  // v'Pv in grey values^2
+  int num_observations = 0;
+  double max_centre_error_px = 0;  // largest |collinearity condition|
+};
+
+bool BuildSystem(const MpgcView& master,
+                 const Eigen::Vector2d& master_xy,
+                 const std::vector<MpgcView>& search,
+                 const LsmTemplate& patch,
+                 const Eigen::Vector3d& xyz,
+                 double step,
+                 double weight,
+                 const MpgcOptions& options,
+                 std::vector<PatchState>* patches,
+                 int* failed,
+                 System* system) {
+  const int u = 3 + kNumLsmParams * static_cast<int>(patches->size());
+  system->N.setZero(u, u);
+  system->rhs.setZero(u);
+  system->cost = 0;
+  system->num_observations = 0;
+  system->max_centre_error_px = 0;
+  // Master: P_m(X) - x_m = 0.
+  {
+    Eigen::Vector2d projected;
+    Eigen::Matrix<double, 2, 3> J;
+    if (!Project(master, xyz, &projected) ||
+        !ProjectionJacobian(master, xyz, step, &J)) {
+      *failed = -1;
+      return false;
+    }
+    const Eigen::Vector2d c = projected - master_xy;
+    system->N.topLeftCorner<3, 3>() += weight * J.transpose() * J;
+    system->rhs.head<3>() -= weight * J.transpose() * c;
+    system->cost += weight * c.squaredNorm();
+    system->num_observations += 2;
+    system->max_centre_error_px =
+        std::max(system->max_centre_error_px, c.norm());
+  }
+  for (size_t k = 0; k < patches->size(); ++k) {
+    PatchState& state = (*patches)[k];
+    const MpgcView& view = search[state.view];
+    const int base = 3 + kNumLsmParams * static_cast<int>(k);
+    if (!BuildLsmNormalEquations(patch,
+                                 *view.image,
+                                 state.params,
+                                 options.lsm.interpolation,
+                                 &state.equations)) {
+      *failed = static_cast<int>(k);
+      return false;
+    }
+    std::array<bool, kNumLsmParams> enabled;
+    enabled.fill(true);
+    if (!options.lsm.estimate_shape) {
+      enabled[kLsmA1] = enabled[kLsmA2] = enabled[kLsmB1] = enabled[kLsmB2] =
+          false;
+    }
+    if (!options.lsm.estimate_radiometry) {
+      enabled[kLsmR0] = enabled[kLsmR1] = false;
+    }
+    state.active = SelectLsmParameters(state.equations.N, enabled, options.lsm);
+    // The geometry fixes what the texture leaves open.
+    state.active[kLsmA0] = state.active[kLsmB0] = true;
+    LsmMatrix N = state.equations.N;
+    LsmVector rhs = state.equations.rhs;
+    for (int p = 0; p < kNumLsmParams; ++p) {
+      if (state.active[p]) continue;
+      N.row(p).setZero();
+      N.col(p).setZero();
+      N(p, p) = 1;
+      rhs(p) = 0;
+    }
+    system->N.block<kNumLsmParams, kNumLsmParams>(base, base) += N;
+    system->rhs.segment<kNumLsmParams>(base) += rhs;
+    system->cost += state.equations.residual_sq;
+    system->num_observations += state.equations.num_observations;
+    // Search image: (a0, b0) - P_j(X) = 0.
+    Eigen::Vector2d projected;
+    Eigen::Matrix<double, 2, 3> J;
+    if (!Project(view, xyz, &projected) ||
+        !ProjectionJacobian(view, xyz, step, &J)) {
+      *failed = static_cast<int>(k);
+      return false;
+    }
+    const Eigen::Vector2d c = state.params.Position() - projected;
+    // C = [dc/dX = -J | dc/d(a0, b0) = I].
+    system->N.topLeftCorner<3, 3>() += weight * J.transpose() * J;
+    system->N.block<3, 2>(0, base) -= weight * J.transpose();
+    system->N.block<2, 3>(base, 0) -= weight * J;
+    system->N.block<2, 2>(base, base) += weight * Eigen::Matrix2d::Identity();
+    system->rhs.head<3>() += weight * J.transpose() * c;
+    system->rhs.segment<2>(base) -= weight * c;
+    system->cost += weight * c.squaredNorm();
+    system->num_observations += 2;
+    system->max_centre_error_px =
+        std::max(system->max_centre_error_px, c.norm());
+  }
+  return true;
+}
+
+}  // namespace
+
+MpgcResult MatchMpgc(const MpgcView& master,
+                     const Eigen::Vector2d& master_xy,
+                     const std::vector<MpgcView>& search,
+                     const Eigen::Vector3d& approximation,
+                     const MpgcOptions& options) {
+  options.Check();
+  MpgcResult result;
+  result.xyz = approximation;
+  LsmTemplate patch;
+  if (!ExtractLsmTemplate(*master.image,
+                          master_xy,
+                          options.lsm.patch_radius,
+                          options.lsm.interpolation,
+                          &patch)) {
+    result.status = MpgcStatus::kOutsideImage;
+    return result;
+  }
+  if (patch.stddev < options.lsm.min_template_stddev) {
+    result.status = MpgcStatus::kFlatPatch;
+    return result;
+  }
+  const double depth = (master.cam_from_world * approximation).z();
+  if (!(depth > 0)) {
+    result.status = MpgcStatus::kBehindCamera;
+    return result;
+  }
+  // Numerical derivative step: a hundredth of a pixel's footprint.
+  const double step = 0.01 * depth / master.camera->MeanFocalLengthPx();
+  const double weight =
+      std::pow(options.grey_sigma / options.geometric_sigma_px, 2);
+
+  std::vector<PatchState> patches;
+  for (size_t j = 0; j < search.size(); ++j) {
+    PatchState state;
+    state.view = static_cast<int>(j);
+    Eigen::Matrix2d shape;
+    Eigen::Vector2d centre;
+    if (!Project(search[j], approximation, &centre) ||
+        (search[j].cam_from_world * approximation).z() <= 0 ||
+        !InducedShape(master, master_xy, search[j], approximation, &shape)) {
+      result.dropped.push_back(static_cast<int>(j));
+      continue;
+    }
+    state.params = LsmParameters::At(centre, shape);
+    state.start = centre;
+    patches.push_back(state);
+  }
+
+  // Solve; drop the worst search patch and solve again while one fails.
+  while (true) {
+    if (static_cast<int>(patches.size()) < options.min_search_views) {
+      result.status = MpgcStatus::kTooFewViews;
+      return result;
+    }
+    Eigen::Vector3d xyz = approximation;
+    for (PatchState& state : patches) {
+      Eigen::Matrix2d shape;
+      Eigen::Vector2d centre;
+      if (Project(search[state.view], xyz, &centre) &&
+          InducedShape(master, master_xy, search[state.view], xyz, &shape)) {
+        state.params = LsmParameters::At(centre, shape);
+      }
+    }
+    int drop = -2;  // index into patches; -2: none
+    bool converged = false;
+    System system;
+    int iteration = 0;
+    for (; iteration < options.max_iterations; ++iteration) {
+      int failed = -2;
+      if (!BuildSystem(master,
+                       master_xy,
+                       search,
+                       patch,
+                       xyz,
+                       step,
+                       weight,
+                       options,
+                       &patches,
+                       &failed,
+                       &system)) {
+        if (failed == -1) {
+          result.status = MpgcStatus::kOutsideImage;
+          return result;
+        }
+        drop = failed;
+        break;
+      }
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(system.N);
+      if (ldlt.info() != Eigen::Success) {
+        result.status = MpgcStatus::kSingular;
+        return result;
+      }
+      Eigen::VectorXd delta = ldlt.solve(system.rhs);
+      if (!delta.allFinite()) {
+        result.status = MpgcStatus::kSingular;
+        return result;
+      }
+      // Step control: halve the step while the sum of squares grows.
+      const Eigen::Vector3d xyz_before = xyz;
+      const std::vector<PatchState> patches_before = patches;
+      double largest_move = 0;
+      for (int halving = 0; halving < 4; ++halving) {
+        xyz = xyz_before + delta.head<3>();
+        patches = patches_before;
+        largest_move = 0;
+        for (size_t k = 0; k < patches.size(); ++k) {
+          LsmVector d = delta.segment<kNumLsmParams>(3 + kNumLsmParams * k);
+          patches[k].params.Add(d);
+          largest_move = std::max(largest_move, d.head<2>().norm());
+        }
+        System trial;
+        int trial_failed = -2;
+        if (BuildSystem(master,
+                        master_xy,
+                        search,
+                        patch,
+                        xyz,
+                        step,
+                        weight,
+                        options,
+                        &patches,
+                        &trial_failed,
+                        &trial) &&
+            trial.cost <= system.cost) {
+          break;
+        }
+        delta *= 0.5;
+      }
+      // Patches that wandered off their approximation show something else.
+      double worst = options.max_shift_px;
+      for (size_t k = 0; k < patches.size(); ++k) {
+        const double moved =
+            (patches[k].params.Position() - patches[k].start).norm();
+        if (moved > worst) {
+          worst = moved;
+          drop = static_cast<int>(k);
+        }
+      }
+      if (drop >= 0) break;
+      if (largest_move < options.convergence_px) {
+        converged = true;
+        ++iteration;
+        break;
+      }
+    }
+    if (drop < 0 && converged) {
+      // The final statistics at the solution.
+      int failed = -2;
+      if (!BuildSystem(master,
+                       master_xy,
+                       search,
+                       patch,
+                       xyz,
+                       step,
+                       weight,
+                       options,
+                       &patches,
+                       &failed,
+                       &system)) {
+        drop = failed >= 0 ? failed : -2;
+        if (failed == -1) {
+          result.status = MpgcStatus::kOutsideImage;
+          return result;
+        }
+      } else {
+        double lowest = options.min_correlation;
+        for (size_t k = 0; k < patches.size(); ++k) {
+          const double r = patches[k].equations.Correlation();
+          if (r < lowest) {
+            lowest = r;
+            drop = static_cast<int>(k);
+          }
+        }
+      }
+    }
+    if (drop >= 0) {
+      result.dropped.push_back(patches[drop].view);
+      patches.erase(patches.begin() + drop);
+      continue;
+    }
+    result.iterations = iteration;
+    if (!converged) {
+      result.status = MpgcStatus::kNotConverged;
+      result.xyz = xyz;
+      return result;
+    }
+    int unknowns = 3;
+    double noise_kept = 0, r1_sq = 0;
+    int samples = 0;
+    for (const PatchState& state : patches) {
+      for (bool a : state.active) unknowns += a;
+      noise_kept += state.equations.noise_gain_sum;
+      samples += state.equations.num_observations;
+      r1_sq += state.params.r1 * state.params.r1;
+    }
+    result.redundancy = system.num_observations - unknowns;
+    if (result.redundancy <= 0) {
+      result.status = MpgcStatus::kSingular;
+      return result;
+    }
+    result.sigma0 = std::sqrt(system.cost / result.redundancy);
+    // Resampling removes part of the search images' noise from the
+    // residuals (lsm.h): the same correction as single-patch matching.
+    if (options.lsm.correct_resampling_noise && samples > 0) {
+      const double kept = noise_kept / samples;
+      r1_sq /= patches.size();
+      result.sigma0 *= std::sqrt((1 + r1_sq) / (1 + r1_sq * kept));
+    }
+    const Eigen::MatrixXd inverse = system.N.ldlt().solve(
+        Eigen::MatrixXd::Identity(system.N.rows(), system.N.cols()));
+    result.covariance =
+        result.sigma0 * result.sigma0 * inverse.topLeftCorner<3, 3>();
+    result.xyz = xyz;
+    for (const PatchState& state : patches) {
+      result.views.push_back(state.view);
+      result.correlation.push_back(state.equations.Correlation());
+      result.xy.push_back(state.params.Position());
+    }
+    result.status = MpgcStatus::kConverged;
+    return result;
+  }
+}
+
+}  // namespace bayon

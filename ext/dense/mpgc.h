@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Multi-photo geometrically constrained matching (MPGC; Gruen 1985, Gruen
+// and Baltsavias 1988, Baltsavias 1991) of one point: the template patch
+// of a master image is matched by least squares against the patches of
+// several search images at once, and the geometry of the oriented images
+// ties the matches together through the object point X they all show.
+//
+// Unknowns: X (3, object coordinates) and, per search image j, the eight
+// parameters of adaptive least-squares matching (ext/matching/lsm.h: the
+// patch centre a0, b0, its shape a1 a2 b1 b2, radiometry r0 r1).
+// Observations:
+//   - the grey values of every search patch against the template (lsm.h's
+//     observation equations, unit weight, grey values);
+//   - the collinearity conditions, as observations of weight
+//     (grey_sigma / geometric_sigma_px)^2: the projection of X into each
+//     search image equals that patch's centre, (a0, b0)_j - P_j(X) = 0, and
+//     the projection into the master equals the template centre,
+//     P_m(X) - x_m = 0.
+// The projections P use the full camera model (distortion, the image's
+// interior orientation), so X comes out of the adjustment directly, with
+// its covariance sigma0^2 (N^-1)_XX. The shifts are always estimated (the
+// geometry determines what the texture leaves open: the point of MPGC);
+// shape and radiometry follow lsm.h's adaptive selection per patch.
+//
+// Blunders and occlusions: a search image whose patch leaves the image,
+// moves more than max_shift_px from its approximation, or whose correlation
+// with the template stays below min_correlation after convergence is
+// dropped (the worst one first) and the point solved again from the rest;
+// the point fails when fewer than min_search_views remain.
+#pragma once
+
+#include "ext/core/camera.h"
+#include "ext/core/image_frame.h"
+#include "ext/core/rigid3.h"
+#include "ext/matching/lsm.h"
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace bayon {
+
+// One oriented image: grey values (CV_32F, 0..255) and its camera.
+struct MpgcView {
+  const cv::Mat* image = nullptr;
+  const Camera* camera = nullptr;
+  Rigid3d cam_from_world;
+  const ImageFrame* frame = nullptr;  // nullptr: the camera's default
+};
+
+struct MpgcOptions {
+  // Patch radius, interpolation and the adaptive selection of shape and
+  // radiometry (lsm.h); step_control is not used here (MPGC halves its own
+  // steps where the total sum of squares grows).
+  LsmOptions lsm;
+  // A priori precision of a grey value and of the collinearity conditions
+  // (the orientation's precision in pixels); their ratio weighs the two
+  // kinds of observation.
+  double grey_sigma = 2.0;
+  double geometric_sigma_px = 0.1;
+  int max_iterations = 30;
+  // Converged when no patch centre moves by more than this, pixels.
+  double convergence_px = 0.005;
+  // A search patch whose centre moves further from its approximation is
+  // dropped (pixels).
+  double max_shift_px = 5.0;
+  // Search patches that correlate less with the template are dropped.
+  double min_correlation = 0.7;
+  int min_search_views = 1;
+  void Check() const;  // throws InputError naming field, value, rule
+};
+
+enum class MpgcStatus {
+  kConverged = 0,
+  kOutsideImage,  // the template leaves the master, X projects outside
+  kFlatPatch,     // the template has no contrast
+  kBehindCamera,  // X behind the master or a search camera
+  kTooFewViews,   // fewer than min_search_views search patches fit
+  kNotConverged,  // max_iterations reached
+  kSingular,      // the normal equations could not be solved
+};
+const char* MpgcStatusName(MpgcStatus status);
+
+struct MpgcResult {
+  MpgcStatus status = MpgcStatus::kSingular;
+  Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // object units^2
+  double sigma0 = 0;  // a posteriori, grey values
+  int iterations = 0;
+  int redundancy = 0;
+  // The search views (indices into the `search` argument) in the final
+  // solution, their patches' correlation with the template and centres.
+  std::vector<int> views;
+  std::vector<double> correlation;
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<int> dropped;  // search views removed as blunders/occlusions
+  bool ok() const { return status == MpgcStatus::kConverged; }
+  Eigen::Vector3d StdDev() const {
+    return covariance.diagonal().cwiseMax(0).cwiseSqrt();
+  }
+};
+
+// Matches the master pixel `master_xy` into the search views, starting from
+// the object point `approximation` (e.g. from correlation along the
+// epipolar line) with each search patch shaped by the local affinity that a
+// plane through it facing the master induces.
+MpgcResult MatchMpgc(const MpgcView& master,
+                     const Eigen::Vector2d& master_xy,
+                     const std::vector<MpgcView>& search,
+                     const Eigen::Vector3d& approximation,
+                     const MpgcOptions& options);
+
+}  // namespace bayon
