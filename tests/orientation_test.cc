@@ -277,20 +277,18 @@ TEST(Orientation, TempleRelativeOrientationsAgreeWithTheCalibration) {
   EXPECT_EQ(database.NumVerifiedPairs(), num_geometries);
 }
 
-// bayon's own chain on the temple ring, free network: relative orientation,
-// disparity surfaces, least-squares tie points, strip (with resection),
-// bundle adjustment; the adjusted stations against the calibrated cameras
-// after a similarity. `self_calibration` as bayon adjust takes it.
-SparseEvaluation TempleThroughBayonsChain(const std::string& name,
-                                          const std::string& self_calibration) {
-  const std::string dir = TempleOrientedCopy(name);
-  const std::string db = dir + "/database.db";
+// disparity, tiepoints, strip and adjust (free network) on an oriented
+// database: the adjusted model in dir/adjusted.
+void BundleThroughBayonsChain(const std::string& db,
+                              const std::string& images,
+                              const std::string& dir,
+                              const std::string& self_calibration) {
   Run({"disparity", "--database_path", db, "--num_threads", "2"});
   Run({"tiepoints",
        "--database_path",
        db,
        "--image_path",
-       testing::DataPath("temple-ring"),
+       images,
        "--num_threads",
        "2"});
   Run({"strip",
@@ -313,6 +311,18 @@ SparseEvaluation TempleThroughBayonsChain(const std::string& name,
        self_calibration,
        "--num_threads",
        "2"});
+}
+
+// bayon's own chain on the temple ring, free network: relative orientation,
+// disparity surfaces, least-squares tie points, strip (with resection),
+// bundle adjustment; the adjusted stations against the calibrated cameras
+// after a similarity. `self_calibration` as bayon adjust takes it.
+SparseEvaluation TempleThroughBayonsChain(const std::string& name,
+                                          const std::string& self_calibration) {
+  const std::string dir = TempleOrientedCopy(name);
+  const std::string db = dir + "/database.db";
+  BundleThroughBayonsChain(
+      db, testing::DataPath("temple-ring"), dir, self_calibration);
   Run({"import_ground_truth",
        "--format",
        "middlebury",
@@ -408,36 +418,8 @@ SparseEvaluation FountainThroughBayonsChain() {
        "3",
        "--num_threads",
        "2"});
-  for (const char* stage : {"relative", "disparity"}) {
-    Run({stage, "--database_path", db, "--num_threads", "2"});
-  }
-  Run({"tiepoints",
-       "--database_path",
-       db,
-       "--image_path",
-       images,
-       "--num_threads",
-       "2"});
-  Run({"strip",
-       "--database_path",
-       db,
-       "--output_path",
-       dir + "/initial",
-       "--num_threads",
-       "2"});
-  Run({"adjust",
-       "--database_path",
-       db,
-       "--input_path",
-       dir + "/initial",
-       "--output_path",
-       dir + "/adjusted",
-       "--datum",
-       "free",
-       "--self_calibration",
-       "none",
-       "--num_threads",
-       "2"});
+  Run({"relative", "--database_path", db, "--num_threads", "2"});
+  BundleThroughBayonsChain(db, images, dir, "none");
   return EvaluateSparse(ReadModel(dir + "/adjusted"), truth);
 }
 

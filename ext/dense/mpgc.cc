@@ -286,13 +286,28 @@ MpgcResult MatchMpgc(const MpgcView& master,
     patches.push_back(state);
   }
 
+  // The normal equations at the current xyz and patches.
+  Eigen::Vector3d xyz = approximation;
+  const auto build = [&](int* failed, System* system) {
+    return BuildSystem(master,
+                       master_xy,
+                       search,
+                       patch,
+                       xyz,
+                       step,
+                       weight,
+                       options,
+                       &patches,
+                       failed,
+                       system);
+  };
   // Solve; drop the worst search patch and solve again while one fails.
   while (true) {
     if (static_cast<int>(patches.size()) < options.min_search_views) {
       result.status = MpgcStatus::kTooFewViews;
       return result;
     }
-    Eigen::Vector3d xyz = approximation;
+    xyz = approximation;
     for (PatchState& state : patches) {
       Eigen::Matrix2d shape;
       Eigen::Vector2d centre;
@@ -307,17 +322,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
     int iteration = 0;
     for (; iteration < options.max_iterations; ++iteration) {
       int failed = -2;
-      if (!BuildSystem(master,
-                       master_xy,
-                       search,
-                       patch,
-                       xyz,
-                       step,
-                       weight,
-                       options,
-                       &patches,
-                       &failed,
-                       &system)) {
+      if (!build(&failed, &system)) {
         if (failed == -1) {
           result.status = MpgcStatus::kOutsideImage;
           return result;
@@ -350,18 +355,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
         }
         System trial;
         int trial_failed = -2;
-        if (BuildSystem(master,
-                        master_xy,
-                        search,
-                        patch,
-                        xyz,
-                        step,
-                        weight,
-                        options,
-                        &patches,
-                        &trial_failed,
-                        &trial) &&
-            trial.cost <= system.cost) {
+        if (build(&trial_failed, &trial) && trial.cost <= system.cost) {
           break;
         }
         delta *= 0.5;
@@ -386,17 +380,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
     if (drop < 0 && converged) {
       // The final statistics at the solution.
       int failed = -2;
-      if (!BuildSystem(master,
-                       master_xy,
-                       search,
-                       patch,
-                       xyz,
-                       step,
-                       weight,
-                       options,
-                       &patches,
-                       &failed,
-                       &system)) {
+      if (!build(&failed, &system)) {
         drop = failed >= 0 ? failed : -2;
         if (failed == -1) {
           result.status = MpgcStatus::kOutsideImage;
