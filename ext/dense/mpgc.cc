@@ -35,6 +35,20 @@ void MpgcOptions::Check() const {
               min_search_views);
 }
 
+void EpipolarSearchOptions::Check() const {
+  CheckOption(window_radius >= 1,
+              "EpipolarSearchOptions.window_radius",
+              ">= 1",
+              window_radius);
+  CheckOption(step_px > 0, "EpipolarSearchOptions.step_px", "> 0", step_px);
+  CheckOption(min_ncc > -1 && min_ncc < 1,
+              "EpipolarSearchOptions.min_ncc",
+              "in (-1, 1)",
+              min_ncc);
+  CheckOption(
+      min_views >= 1, "EpipolarSearchOptions.min_views", ">= 1", min_views);
+}
+
 const char* MpgcStatusName(MpgcStatus status) {
   switch (status) {
     case MpgcStatus::kConverged:
@@ -237,6 +251,89 @@ bool BuildSystem(const MpgcView& master,
 }
 
 }  // namespace
+
+EpipolarSearchResult SearchMasterRay(const MpgcView& master,
+                                     const Eigen::Vector2d& master_xy,
+                                     const std::vector<MpgcView>& search,
+                                     double min_distance,
+                                     double max_distance,
+                                     const EpipolarSearchOptions& options) {
+  options.Check();
+  CheckOption(min_distance > 0 && max_distance > min_distance,
+              "SearchMasterRay distances",
+              "0 < min_distance < max_distance",
+              max_distance);
+  EpipolarSearchResult result;
+  Eigen::Vector3d origin, direction;
+  LsmTemplate window;
+  if (!MasterRay(master, master_xy, &origin, &direction) ||
+      !ExtractLsmTemplate(*master.image,
+                          master_xy,
+                          options.window_radius,
+                          Interpolation::kBilinear,
+                          &window)) {
+    return result;
+  }
+  // Samples even in inverse distance; as many as the longest epipolar
+  // segment needs.
+  double longest = 0;
+  for (const MpgcView& view : search) {
+    Eigen::Vector2d near, far;
+    if (Project(view, origin + min_distance * direction, &near) &&
+        Project(view, origin + max_distance * direction, &far)) {
+      longest = std::max(longest, (near - far).norm());
+    }
+  }
+  const int n = std::clamp(
+      static_cast<int>(std::ceil(longest / options.step_px)) + 1, 2, 100000);
+  result.num_samples = n;
+  const auto distance_of = [&](double k) {
+    const double inverse =
+        1 / min_distance + k / (n - 1) * (1 / max_distance - 1 / min_distance);
+    return 1 / inverse;
+  };
+  std::vector<double> score(n, -2);
+  std::vector<int> views(n, 0);
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d xyz = origin + distance_of(k) * direction;
+    double sum = 0;
+    for (const MpgcView& view : search) {
+      Eigen::Vector2d xy;
+      Eigen::Matrix2d shape;
+      LsmNormalEquations equations;
+      if (!Project(view, xyz, &xy) ||
+          !InducedShape(master, master_xy, view, xyz, &shape) ||
+          !BuildLsmNormalEquations(window,
+                                   *view.image,
+                                   LsmParameters::At(xy, shape),
+                                   Interpolation::kBilinear,
+                                   &equations)) {
+        continue;
+      }
+      sum += equations.Correlation();
+      ++views[k];
+    }
+    if (views[k] >= options.min_views) score[k] = sum / views[k];
+  }
+  const int best = static_cast<int>(
+      std::max_element(score.begin(), score.end()) - score.begin());
+  result.ncc = score[best];
+  result.num_views = views[best];
+  double k = best;
+  if (best > 0 && best < n - 1 && score[best - 1] > -2 &&
+      score[best + 1] > -2) {
+    const double curvature =
+        score[best - 1] - 2 * score[best] + score[best + 1];
+    if (curvature < 0) {
+      k += std::clamp(
+          0.5 * (score[best - 1] - score[best + 1]) / curvature, -0.5, 0.5);
+    }
+  }
+  result.distance = distance_of(k);
+  result.xyz = origin + result.distance * direction;
+  result.found = result.ncc >= options.min_ncc;
+  return result;
+}
 
 MpgcResult MatchMpgc(const MpgcView& master,
                      const Eigen::Vector2d& master_xy,

@@ -102,6 +102,39 @@ struct MpgcResult {
   }
 };
 
+// Approximations for MPGC (the paper's step 3 of section 3.3): the object
+// point on the master pixel's ray whose projections into the search views
+// correlate best with the master window, the mean correlation coefficient
+// over the views where it projects inside, each search window shaped as a
+// plane facing the master through that point would show it. The ray is
+// sampled between two distances from the master's projection centre, evenly
+// in inverse distance, so that the largest epipolar step is step_px, and the
+// best sample refined by a parabola through its neighbours.
+struct EpipolarSearchOptions {
+  int window_radius = 3;  // 7 x 7 windows, the paper's
+  double step_px = 0.5;
+  // The best mean correlation must reach this, over at least min_views.
+  double min_ncc = 0.6;
+  int min_views = 1;
+  void Check() const;  // throws InputError naming field, value, rule
+};
+
+struct EpipolarSearchResult {
+  bool found = false;
+  Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
+  double distance = 0;  // from the master's projection centre, object units
+  double ncc = -1;      // mean over the views
+  int num_views = 0;
+  int num_samples = 0;
+};
+
+EpipolarSearchResult SearchMasterRay(const MpgcView& master,
+                                     const Eigen::Vector2d& master_xy,
+                                     const std::vector<MpgcView>& search,
+                                     double min_distance,
+                                     double max_distance,
+                                     const EpipolarSearchOptions& options);
+
 // Matches the master pixel `master_xy` into the search views, starting from
 // the object point `approximation` (e.g. from correlation along the
 // epipolar line) with each search patch shaped by the local affinity that a

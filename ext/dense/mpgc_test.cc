@@ -179,6 +179,53 @@ TEST(Mpgc, AnOccludedSearchImageIsDropped) {
   }
 }
 
+// Approximations from the master ray alone (half a metre either side of
+// the plane, about 60 px of epipolar line in the widest search image),
+// then MPGC from them.
+TEST(Mpgc, ApproximationsAlongTheMasterRay) {
+  const PlaneScene scene(2.0);
+  const std::vector<MpgcView> search = scene.SearchViews();
+  int num_points = 0, num_close = 0, num_matched = 0;
+  for (int y = 60; y <= 180; y += 30) {
+    for (int x = 70; x <= 250; x += 30) {
+      const Eigen::Vector2d master_xy(x + 0.5, y + 0.5);
+      const Eigen::Vector3d truth = *scene.OnPlane(scene.poses[0], master_xy);
+      const double distance = (truth - scene.poses[0].Center()).norm();
+      const EpipolarSearchResult approximation =
+          SearchMasterRay(scene.View(0),
+                          master_xy,
+                          search,
+                          distance - 0.5,
+                          distance + 0.5,
+                          EpipolarSearchOptions());
+      ++num_points;
+      if (!approximation.found) continue;
+      EXPECT_EQ(approximation.num_views, 4);
+      // Within a pixel in every search image.
+      bool close = true;
+      for (const MpgcView& view : search) {
+        Eigen::Vector2d a, b;
+        ASSERT_TRUE(scene.camera.ImgFromCam(
+            view.cam_from_world * approximation.xyz, &a));
+        ASSERT_TRUE(scene.camera.ImgFromCam(view.cam_from_world * truth, &b));
+        close &= (a - b).norm() < 1.0;
+      }
+      num_close += close;
+      const MpgcResult result = MatchMpgc(
+          scene.View(0), master_xy, search, approximation.xyz, MpgcOptions());
+      num_matched += result.ok() && (result.xyz - truth).norm() < 0.001;
+    }
+  }
+  std::printf(
+      "master-ray search: %d/%d points within a pixel, %d matched by MPGC "
+      "within 1 mm\n",
+      num_close,
+      num_points,
+      num_matched);
+  EXPECT_GE(num_close, 0.95 * num_points);
+  EXPECT_GE(num_matched, 0.95 * num_points);
+}
+
 TEST(Mpgc, FailuresSayWhy) {
   const PlaneScene scene(2.0);
   // The template leaves the master image.
@@ -207,6 +254,15 @@ TEST(Mpgc, FailuresSayWhy) {
                       MpgcOptions())
                 .status,
             MpgcStatus::kFlatPatch);
+  EpipolarSearchOptions bad_search;
+  bad_search.step_px = 0;
+  EXPECT_THROW(SearchMasterRay(scene.View(0),
+                               Eigen::Vector2d(160.5, 120.5),
+                               scene.SearchViews(),
+                               3.5,
+                               4.5,
+                               bad_search),
+               InputError);
   MpgcOptions bad;
   bad.geometric_sigma_px = 0;
   EXPECT_THROW(MatchMpgc(scene.View(0),
