@@ -6,10 +6,11 @@
 
 namespace bayon {
 
-// The median of a non-empty sample: the element at n / 2 in sorted order
-// (the upper one of the middle two for even n), by partial sorting of the
-// copy it takes.
+// The median of a sample: the element at n / 2 in sorted order (the upper
+// one of the middle two for even n), by partial sorting of the copy it
+// takes; 0 for an empty sample.
 inline double Median(std::vector<double> values) {
+  if (values.empty()) return 0;
   const auto mid = values.begin() + values.size() / 2;
   std::nth_element(values.begin(), mid, values.end());
   return *mid;

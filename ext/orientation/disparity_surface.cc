@@ -4,6 +4,7 @@
 #include "ext/colmap/table_relative.h"
 #include "ext/core/errors.h"
 #include "ext/core/progress.h"
+#include "ext/core/statistics.h"
 
 #include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>
@@ -114,13 +115,6 @@ void DisparitySurfaceOptions::Check() const {
 namespace {
 
 constexpr double kMadToSigma = 1.4826;
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
-}
 
 double Quantile(std::vector<double> values, double q) {
   if (values.empty()) return 0;

@@ -2,6 +2,7 @@
 #include "ext/orientation/relative_orientation.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/statistics.h"
 
 #include <Eigen/Dense>
 
@@ -83,13 +84,6 @@ void TangentBasis(const Eigen::Vector3d& b,
   if (axis.norm() < 1e-6) axis = Eigen::Vector3d::UnitX().cross(b);
   *e1 = axis.normalized();
   *e2 = b.cross(*e1);
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
 }
 
 // The scale of eq. (4) from the squared residuals of a model with p

@@ -2,6 +2,7 @@
 #include "ext/orientation/virtual_fiducials.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/statistics.h"
 
 #include <Eigen/Dense>
 #include <glog/logging.h>
@@ -128,13 +129,6 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 
 bool IsVertical(FrameSide side) {
   return side == FrameSide::kLeft || side == FrameSide::kRight;
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
 }
 
 // Median and robust standard deviation (1.4826 MAD).
