@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/dense/mpgc.h"
 
+#include "ext/adjustment/triangulation.h"
 #include "ext/core/errors.h"
 
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <optional>
 
 namespace bayon {
 
@@ -94,44 +97,55 @@ bool ProjectionJacobian(const MpgcView& view,
   return true;
 }
 
-// The ray of a master pixel, world frame: origin and unit direction.
-bool MasterRay(const MpgcView& master,
-               const Eigen::Vector2d& xy,
-               Eigen::Vector3d* origin,
-               Eigen::Vector3d* direction) {
-  Eigen::Vector3d ray;
-  if (!master.camera->CamFromImg(xy, &ray, master.frame)) return false;
-  const Eigen::Quaterniond world_from_cam =
-      master.cam_from_world.rotation.inverse();
-  *origin = master.cam_from_world.Center();
-  *direction = (world_from_cam * ray).normalized();
-  return true;
+// The master rays of a pixel and of its right and lower neighbours (they
+// fix the patch shapes), found once per point: inverting the distortion is
+// the costly part of a ray.
+struct MasterRays {
+  Ray centre;
+  std::array<Ray, 2> neighbours;
+};
+
+std::optional<MasterRays> RaysOf(const MpgcView& master,
+                                 const Eigen::Vector2d& xy) {
+  MasterRays rays;
+  const auto ray = [&](const Eigen::Vector2d& pixel, Ray* out) {
+    const std::optional<Ray> found = RayThroughPixel(
+        *master.camera, master.cam_from_world, pixel, master.frame);
+    if (found) *out = *found;
+    return found.has_value();
+  };
+  if (!ray(xy, &rays.centre)) return std::nullopt;
+  for (int k = 0; k < 2; ++k) {
+    if (!ray(xy + Eigen::Vector2d::Unit(k), &rays.neighbours[k])) {
+      return std::nullopt;
+    }
+  }
+  return rays;
 }
 
 // The search patch's shape: how a plane through X facing the master maps
-// a master pixel step into the search image.
-bool InducedShape(const MpgcView& master,
-                  const Eigen::Vector2d& master_xy,
+// a master pixel step into the search image. Where the master rays of the
+// pixel and of its neighbours meet the plane, projected into the search
+// image (X itself need not lie on the master ray: it is an approximation).
+bool InducedShape(const MasterRays& rays,
                   const MpgcView& view,
                   const Eigen::Vector3d& xyz,
                   Eigen::Matrix2d* shape) {
-  Eigen::Vector3d origin, normal;
-  if (!MasterRay(master, master_xy, &origin, &normal)) return false;
-  // Where the master rays of the pixel and of its neighbours meet the
-  // plane, projected into the search image (X itself need not lie on the
-  // master ray: it is an approximation).
-  const auto on_plane = [&](const Eigen::Vector2d& xy, Eigen::Vector2d* pixel) {
-    Eigen::Vector3d o, d;
-    if (!MasterRay(master, xy, &o, &d)) return false;
-    const double denominator = d.dot(normal);
+  const Eigen::Vector3d& normal = rays.centre.direction;
+  const auto on_plane = [&](const Ray& ray, Eigen::Vector2d* pixel) {
+    const double denominator = ray.direction.dot(normal);
     if (std::abs(denominator) < 1e-9) return false;
-    return Project(view, o + d * ((xyz - o).dot(normal) / denominator), pixel);
+    return Project(
+        view,
+        ray.origin +
+            ray.direction * ((xyz - ray.origin).dot(normal) / denominator),
+        pixel);
   };
   Eigen::Vector2d centre;
-  if (!on_plane(master_xy, &centre)) return false;
+  if (!on_plane(rays.centre, &centre)) return false;
   for (int k = 0; k < 2; ++k) {
     Eigen::Vector2d moved;
-    if (!on_plane(master_xy + Eigen::Vector2d::Unit(k), &moved)) return false;
+    if (!on_plane(rays.neighbours[k], &moved)) return false;
     shape->col(k) = moved - centre;
   }
   return true;
@@ -140,7 +154,9 @@ bool InducedShape(const MpgcView& master,
 struct PatchState {
   int view = -1;  // index into `search`
   LsmParameters params;
-  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  // At the approximation: where each solution starts from, and the centre
+  // the patch may not wander far from.
+  LsmParameters start;
   std::array<bool, kNumLsmParams> active{};
   LsmNormalEquations equations;
 };
@@ -264,16 +280,17 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
               "0 < min_distance < max_distance",
               max_distance);
   EpipolarSearchResult result;
-  Eigen::Vector3d origin, direction;
+  const std::optional<MasterRays> rays = RaysOf(master, master_xy);
   LsmTemplate window;
-  if (!MasterRay(master, master_xy, &origin, &direction) ||
-      !ExtractLsmTemplate(*master.image,
-                          master_xy,
-                          options.window_radius,
-                          Interpolation::kBilinear,
-                          &window)) {
+  if (!rays || !ExtractLsmTemplate(*master.image,
+                                   master_xy,
+                                   options.window_radius,
+                                   Interpolation::kBilinear,
+                                   &window)) {
     return result;
   }
+  const Eigen::Vector3d& origin = rays->centre.origin;
+  const Eigen::Vector3d& direction = rays->centre.direction;
   // Samples even in inverse distance; as many as the longest epipolar
   // segment needs.
   double longest = 0;
@@ -300,17 +317,16 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
     for (const MpgcView& view : search) {
       Eigen::Vector2d xy;
       Eigen::Matrix2d shape;
-      LsmNormalEquations equations;
-      if (!Project(view, xyz, &xy) ||
-          !InducedShape(master, master_xy, view, xyz, &shape) ||
-          !BuildLsmNormalEquations(window,
-                                   *view.image,
-                                   LsmParameters::At(xy, shape),
-                                   Interpolation::kBilinear,
-                                   &equations)) {
+      double correlation = 0;
+      if (!Project(view, xyz, &xy) || !InducedShape(*rays, view, xyz, &shape) ||
+          !LsmCorrelation(window,
+                          *view.image,
+                          LsmParameters::At(xy, shape),
+                          Interpolation::kBilinear,
+                          &correlation)) {
         continue;
       }
-      sum += equations.Correlation();
+      sum += correlation;
       ++views[k];
     }
     if (views[k] >= options.min_views) score[k] = sum / views[k];
@@ -361,6 +377,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
     result.status = MpgcStatus::kBehindCamera;
     return result;
   }
+  const std::optional<MasterRays> rays = RaysOf(master, master_xy);
   // Numerical derivative step: a hundredth of a pixel's footprint.
   const double step = 0.01 * depth / master.camera->MeanFocalLengthPx();
   const double weight =
@@ -373,13 +390,12 @@ MpgcResult MatchMpgc(const MpgcView& master,
     Eigen::Matrix2d shape;
     Eigen::Vector2d centre;
     if (!Project(search[j], approximation, &centre) ||
-        (search[j].cam_from_world * approximation).z() <= 0 ||
-        !InducedShape(master, master_xy, search[j], approximation, &shape)) {
+        (search[j].cam_from_world * approximation).z() <= 0 || !rays ||
+        !InducedShape(*rays, search[j], approximation, &shape)) {
       result.dropped.push_back(static_cast<int>(j));
       continue;
     }
-    state.params = LsmParameters::At(centre, shape);
-    state.start = centre;
+    state.start = LsmParameters::At(centre, shape);
     patches.push_back(state);
   }
 
@@ -405,21 +421,17 @@ MpgcResult MatchMpgc(const MpgcView& master,
       return result;
     }
     xyz = approximation;
-    for (PatchState& state : patches) {
-      Eigen::Matrix2d shape;
-      Eigen::Vector2d centre;
-      if (Project(search[state.view], xyz, &centre) &&
-          InducedShape(master, master_xy, search[state.view], xyz, &shape)) {
-        state.params = LsmParameters::At(centre, shape);
-      }
-    }
+    for (PatchState& state : patches) state.params = state.start;
     int drop = -2;  // index into patches; -2: none
     bool converged = false;
+    // The system at the current state: built once here, then carried over
+    // from the step that reached each next state.
     System system;
+    int failed = -2;
+    bool built = build(&failed, &system);
     int iteration = 0;
     for (; iteration < options.max_iterations; ++iteration) {
-      int failed = -2;
-      if (!build(&failed, &system)) {
+      if (!built) {
         if (failed == -1) {
           result.status = MpgcStatus::kOutsideImage;
           return result;
@@ -441,6 +453,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
       const Eigen::Vector3d xyz_before = xyz;
       const std::vector<PatchState> patches_before = patches;
       double largest_move = 0;
+      System trial;
       for (int halving = 0; halving < 4; ++halving) {
         xyz = xyz_before + delta.head<3>();
         patches = patches_before;
@@ -450,18 +463,17 @@ MpgcResult MatchMpgc(const MpgcView& master,
           patches[k].params.Add(d);
           largest_move = std::max(largest_move, d.head<2>().norm());
         }
-        System trial;
-        int trial_failed = -2;
-        if (build(&trial_failed, &trial) && trial.cost <= system.cost) {
-          break;
-        }
+        failed = -2;
+        built = build(&failed, &trial);
+        if (built && trial.cost <= system.cost) break;
         delta *= 0.5;
       }
+      system = std::move(trial);
       // Patches that wandered off their approximation show something else.
       double worst = options.max_shift_px;
       for (size_t k = 0; k < patches.size(); ++k) {
         const double moved =
-            (patches[k].params.Position() - patches[k].start).norm();
+            (patches[k].params.Position() - patches[k].start.Position()).norm();
         if (moved > worst) {
           worst = moved;
           drop = static_cast<int>(k);
@@ -475,9 +487,9 @@ MpgcResult MatchMpgc(const MpgcView& master,
       }
     }
     if (drop < 0 && converged) {
-      // The final statistics at the solution.
-      int failed = -2;
-      if (!build(&failed, &system)) {
+      // The final statistics at the solution (its system is the last
+      // step's).
+      if (!built) {
         drop = failed >= 0 ? failed : -2;
         if (failed == -1) {
           result.status = MpgcStatus::kOutsideImage;

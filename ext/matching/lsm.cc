@@ -107,14 +107,61 @@ bool ExtractLsmTemplate(const cv::Mat& image,
   return true;
 }
 
-double LsmNormalEquations::Correlation() const {
-  const double n = num_observations;
+namespace {
+
+// The correlation coefficient from the sums over n sample pairs (f, g).
+double CorrelationFromSums(double n,
+                           double sum_f,
+                           double sum_g,
+                           double sum_ff,
+                           double sum_gg,
+                           double sum_fg) {
   if (n < 2) return 0;
   const double cov = sum_fg - sum_f * sum_g / n;
   const double var_f = sum_ff - sum_f * sum_f / n;
   const double var_g = sum_gg - sum_g * sum_g / n;
   if (var_f <= 0 || var_g <= 0) return 0;
   return cov / std::sqrt(var_f * var_g);
+}
+
+}  // namespace
+
+double LsmNormalEquations::Correlation() const {
+  return CorrelationFromSums(
+      num_observations, sum_f, sum_g, sum_ff, sum_gg, sum_fg);
+}
+
+bool LsmCorrelation(const LsmTemplate& patch,
+                    const cv::Mat& search,
+                    const LsmParameters& params,
+                    Interpolation interpolation,
+                    double* correlation) {
+  const int r = patch.radius;
+  const auto& a = params.affine;
+  double sum_f = 0, sum_g = 0, sum_ff = 0, sum_gg = 0, sum_fg = 0;
+  int k = 0;
+  for (int v = -r; v <= r; ++v) {
+    for (int u = -r; u <= r; ++u, ++k) {
+      ImageSample sample;
+      if (!SampleImage(search,
+                       a(0, 2) + a(0, 0) * u + a(0, 1) * v,
+                       a(1, 2) + a(1, 0) * u + a(1, 1) * v,
+                       interpolation,
+                       &sample)) {
+        return false;
+      }
+      const double f = patch.values[k];
+      const double g = sample.value;
+      sum_f += f;
+      sum_g += g;
+      sum_ff += f * f;
+      sum_gg += g * g;
+      sum_fg += f * g;
+    }
+  }
+  *correlation =
+      CorrelationFromSums(patch.size(), sum_f, sum_g, sum_ff, sum_gg, sum_fg);
+  return true;
 }
 
 bool BuildLsmNormalEquations(const LsmTemplate& patch,

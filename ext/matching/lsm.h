@@ -151,6 +151,16 @@ bool BuildLsmNormalEquations(const LsmTemplate& patch,
                              Interpolation interpolation,
                              LsmNormalEquations* equations);
 
+// The correlation coefficient of the template and the search patch
+// resampled at `params` alone, without the normal equations (the same value
+// as BuildLsmNormalEquations' Correlation()): for searches that only rank
+// positions. False where a sample leaves the search image.
+bool LsmCorrelation(const LsmTemplate& patch,
+                    const cv::Mat& search,
+                    const LsmParameters& params,
+                    Interpolation interpolation,
+                    double* correlation);
+
 struct LsmOptions {
   // Half side of the patch, pixels: 7 gives the 15 x 15 patch. Larger
   // patches are more precise on weak texture and less exact on relief.

@@ -307,6 +307,10 @@ TEST(Lsm, NormalEquationsMatchFiniteDifferences) {
     LsmNormalEquations equations;
     ASSERT_TRUE(
         BuildLsmNormalEquations(patch, g, params, interpolation, &equations));
+    // The correlation alone is the same number.
+    double correlation = 0;
+    ASSERT_TRUE(LsmCorrelation(patch, g, params, interpolation, &correlation));
+    EXPECT_EQ(correlation, equations.Correlation());
     for (int j = 0; j < kNumLsmParams; ++j) {
       // Steps large enough for the float precision of the grey values.
       const double step =
