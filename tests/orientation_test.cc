@@ -79,6 +79,37 @@ void Run(const std::vector<std::string>& args) {
   ASSERT_EQ(result.exit_code, 0) << result.output;
 }
 
+// A database of `images` with one PINHOLE camera of the calibrated
+// `params` (fx fy cx cy, the focal length marked as known), bayon's Moravec
+// points and correlation matches (`pairing` arguments of bayon match).
+void MatchWithCalibratedCamera(const std::string& images,
+                               const std::string& db,
+                               const std::vector<double>& params,
+                               const std::vector<std::string>& pairing) {
+  Run({"import",
+       "--image_path",
+       images,
+       "--database_path",
+       db,
+       "--single_camera",
+       "1",
+       "--camera_model",
+       "PINHOLE"});
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    Camera camera = database.ReadCamera(1);
+    camera.params = params;
+    camera.has_prior_focal_length = true;
+    database.UpdateCamera(camera);
+  }
+  Run({"features", "--database_path", db, "--image_path", images});
+  std::vector<std::string> match = {
+      "match", "--database_path", db, "--image_path", images};
+  match.insert(match.end(), pairing.begin(), pairing.end());
+  match.insert(match.end(), {"--num_threads", "2"});
+  Run(match);
+}
+
 // The temple ring in a database with its calibrated camera (PINHOLE, with
 // the focal length marked as known), bayon's Moravec points and
 // correlation matches of every pair.
@@ -86,35 +117,12 @@ std::string TempleMatchedFixture() {
   return testing::SharedFixture(
       "temple_bayon_matches", [](const std::string& dir) {
         const std::string images = testing::DataPath("temple-ring");
-        const std::string db = dir + "/database.db";
-        Run({"import",
-             "--image_path",
-             images,
-             "--database_path",
-             db,
-             "--single_camera",
-             "1",
-             "--camera_model",
-             "PINHOLE"});
-        {
-          const TrueCamera truth = ReadTempleCameras().begin()->second;
-          Database database(db, Database::Mode::kReadWrite);
-          Camera camera = database.ReadCamera(1);
-          camera.params = {
-              truth.K(0, 0), truth.K(1, 1), truth.K(0, 2), truth.K(1, 2)};
-          camera.has_prior_focal_length = true;
-          database.UpdateCamera(camera);
-        }
-        Run({"features", "--database_path", db, "--image_path", images});
-        Run({"match",
-             "--database_path",
-             db,
-             "--image_path",
-             images,
-             "--pairing",
-             "exhaustive",
-             "--num_threads",
-             "2"});
+        const TrueCamera truth = ReadTempleCameras().begin()->second;
+        MatchWithCalibratedCamera(
+            images,
+            dir + "/database.db",
+            {truth.K(0, 0), truth.K(1, 1), truth.K(0, 2), truth.K(1, 2)},
+            {"--pairing", "exhaustive"});
       });
 }
 
@@ -390,34 +398,11 @@ SparseEvaluation FountainThroughBayonsChain() {
        "--image_path",
        images});
   const Scene truth = ReadModel(dir + "/truth");
-  Run({"import",
-       "--image_path",
-       images,
-       "--database_path",
-       db,
-       "--single_camera",
-       "1",
-       "--camera_model",
-       "PINHOLE"});
-  {
-    Database database(db, Database::Mode::kReadWrite);
-    Camera camera = database.ReadCamera(1);
-    camera.params = truth.cameras.begin()->second.params;
-    camera.has_prior_focal_length = true;
-    database.UpdateCamera(camera);
-  }
-  Run({"features", "--database_path", db, "--image_path", images});
-  Run({"match",
-       "--database_path",
-       db,
-       "--image_path",
-       images,
-       "--pairing",
-       "sequential",
-       "--num_neighbors",
-       "3",
-       "--num_threads",
-       "2"});
+  MatchWithCalibratedCamera(
+      images,
+      db,
+      truth.cameras.begin()->second.params,
+      {"--pairing", "sequential", "--num_neighbors", "3"});
   Run({"relative", "--database_path", db, "--num_threads", "2"});
   BundleThroughBayonsChain(db, images, dir, "none");
   return EvaluateSparse(ReadModel(dir + "/adjusted"), truth);
