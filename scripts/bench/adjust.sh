@@ -16,22 +16,7 @@ dir="$BAYON_BUILD/bench/adjust"
 data="$BAYON_DATA_DIR"
 mkdir -p "$dir"
 
-# run LABEL COMMAND...: times the command into $dir/LABEL.{log,time}.
-run() {
-  local label="$1"
-  shift
-  if ! /usr/bin/time -v -o "$dir/$label.time" "$@" >"$dir/$label.log" 2>&1; then
-    echo "$label failed, see $dir/$label.log" >&2
-    return 1
-  fi
-}
-wall() {
-  sed -n 's/.*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "$dir/$1.time" |
-    awk -F: '{ s = 0; for (i = 1; i <= NF; ++i) s = s * 60 + $i; print s }'
-}
-peak_mb() {
-  echo $(($(sed -n 's/.*Maximum resident set size (kbytes): //p' "$dir/$1.time") / 1024))
-}
+source "$(dirname "$0")/lib/timing.sh"
 # Figures from the reports: bayon's adjustment.json, COLMAP's log.
 bayon_figures() {
   python3 - "$1" <<'EOF'
@@ -51,7 +36,7 @@ colmap_figures() {
   echo "final cost ${final} px, ${iterations} iterations"
 }
 row() {
-  printf '%-44s %7.1f %7s   %s\n' "$1" "$(wall "$2")" "$(peak_mb "$2")" "$3"
+  printf '%-44s %7.1f %7s   %s\n' "$1" "$(wall_s "$dir/$2")" "$(peak_mb "$dir/$2")" "$3"
 }
 
 # --- 1. BAL ladybug-49-7776
@@ -60,11 +45,11 @@ rm -rf "$bal"
 "$BAYON" import_bal --input_path "$data/bundle/ladybug-49-7776/problem-49-7776-pre.txt" \
   --output_path "$bal" >/dev/null
 mkdir -p "$bal/sparse/colmap"
-run bal_bayon "$BAYON" adjust --database_path "$bal/database.db" \
+timed "$dir/bal_bayon" "$BAYON" adjust --database_path "$bal/database.db" \
   --input_path "$bal/sparse/0" --output_path "$bal/sparse/bayon" \
   --camera_model colmap --self_calibration all --two_steps 0 \
   --blunder_detection none --datum free --log_path "$bal/adjust.log"
-run bal_colmap colmap bundle_adjuster --input_path "$bal/sparse/0" \
+timed "$dir/bal_colmap" colmap bundle_adjuster --input_path "$bal/sparse/0" \
   --output_path "$bal/sparse/colmap"
 
 # --- 2. sceaux-castle, stock COLMAP model
@@ -85,16 +70,16 @@ fi
 rm -rf "$sceaux/adjusted" "$sceaux/adjusted_colmap_camera" "$sceaux/adjusted_aps" \
   "$sceaux/colmap_ba"
 mkdir -p "$sceaux/colmap_ba"
-run sceaux_colmap colmap bundle_adjuster --input_path "$sceaux/sparse/0" \
+timed "$dir/sceaux_colmap" colmap bundle_adjuster --input_path "$sceaux/sparse/0" \
   --output_path "$sceaux/colmap_ba"
-run sceaux_bayon_same "$BAYON" adjust --database_path "$sceaux/database.db" \
+timed "$dir/sceaux_bayon_same" "$BAYON" adjust --database_path "$sceaux/database.db" \
   --input_path "$sceaux/sparse/0" --output_path "$sceaux/adjusted_colmap_camera" \
   --camera_model colmap --self_calibration all --two_steps 0 \
   --blunder_detection none --datum free --log_path "$sceaux/adjust.log"
-run sceaux_bayon_aps "$BAYON" adjust --database_path "$sceaux/database.db" \
+timed "$dir/sceaux_bayon_aps" "$BAYON" adjust --database_path "$sceaux/database.db" \
   --input_path "$sceaux/sparse/0" --output_path "$sceaux/adjusted_aps" \
   --blunder_detection none --log_path "$sceaux/adjust.log"
-run sceaux_bayon_full "$BAYON" adjust --database_path "$sceaux/database.db" \
+timed "$dir/sceaux_bayon_full" "$BAYON" adjust --database_path "$sceaux/database.db" \
   --input_path "$sceaux/sparse/0" --output_path "$sceaux/adjusted" \
   --log_path "$sceaux/adjust.log"
 colmap_mean=$(colmap model_analyzer --path "$sceaux/sparse/0" 2>&1 |
@@ -112,8 +97,8 @@ row "sceaux: bayon adjust (10 APs selected)" sceaux_bayon_aps \
 row "sceaux: bayon adjust (10 APs, snooping)" sceaux_bayon_full \
   "$(bayon_figures "$sceaux/adjusted/adjustment.json")"
 echo "sceaux: colmap mapper's mean reprojection error ${colmap_mean} px"
-awk -v a="$(wall bal_bayon)" -v b="$(wall bal_colmap)" \
-  -v c="$(wall sceaux_bayon_same)" -v d="$(wall sceaux_colmap)" 'BEGIN {
+awk -v a="$(wall_s "$dir/bal_bayon")" -v b="$(wall_s "$dir/bal_colmap")" \
+  -v c="$(wall_s "$dir/sceaux_bayon_same")" -v d="$(wall_s "$dir/sceaux_colmap")" 'BEGIN {
   printf "time ratio bayon / colmap: ladybug %.2f, sceaux (same camera) %.2f\n",
          a / b, c / d }'
 echo "outputs and logs in $dir"

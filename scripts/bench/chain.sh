@@ -28,16 +28,7 @@ if [ ! -f "$baseline/temple/evaluation.json" ] ||
   bash "$(dirname "$0")/colmap_baseline.sh" >/dev/null
 fi
 
-# step LOG COMMAND...: the command's output to LOG.log, /usr/bin/time to
-# LOG.time.
-step() {
-  local log="$1"
-  shift
-  if ! /usr/bin/time -v -o "$log.time" "$@" >"$log.log" 2>&1; then
-    echo "failed: $*; see $log.log" >&2
-    return 1
-  fi
-}
+source "$(dirname "$0")/lib/timing.sh"
 
 # chain NAME IMAGES FORMAT TRUTH_INPUT MATCH_ARGS...
 chain() {
@@ -50,7 +41,7 @@ chain() {
   [ "$format" = strecha ] && image_path_flag=(--image_path "$images")
   "$BAYON" import_ground_truth --format "$format" --input_path "$truth_input" \
     --output_path "$ws/truth" "${image_path_flag[@]}" >"$ws/truth.log" 2>&1
-  step "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
+  timed "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
     --single_camera 1 --camera_model PINHOLE
   # The calibrated camera (the truth's, PINHOLE fx fy cx cy) as a known
   # focal length.
@@ -64,19 +55,19 @@ with sqlite3.connect(db) as c:
     c.execute("update cameras set params = ?, prior_focal_length = 1",
               (struct.pack("<4d", *params),))
 EOF
-  step "$ws/features" "$BAYON" features --database_path "$db" \
+  timed "$ws/features" "$BAYON" features --database_path "$db" \
     --image_path "$images" --num_threads "$threads"
-  step "$ws/match" "$BAYON" match --database_path "$db" --image_path "$images" \
+  timed "$ws/match" "$BAYON" match --database_path "$db" --image_path "$images" \
     --num_threads "$threads" "$@"
-  step "$ws/relative" "$BAYON" relative --database_path "$db" \
+  timed "$ws/relative" "$BAYON" relative --database_path "$db" \
     --num_threads "$threads"
-  step "$ws/disparity" "$BAYON" disparity --database_path "$db" \
+  timed "$ws/disparity" "$BAYON" disparity --database_path "$db" \
     --num_threads "$threads"
-  step "$ws/tiepoints" "$BAYON" tiepoints --database_path "$db" \
+  timed "$ws/tiepoints" "$BAYON" tiepoints --database_path "$db" \
     --image_path "$images" --num_threads "$threads"
-  step "$ws/strip" "$BAYON" strip --database_path "$db" \
+  timed "$ws/strip" "$BAYON" strip --database_path "$db" \
     --output_path "$ws/initial" --num_threads "$threads"
-  step "$ws/adjust" "$BAYON" adjust --database_path "$db" \
+  timed "$ws/adjust" "$BAYON" adjust --database_path "$db" \
     --input_path "$ws/initial" --output_path "$ws/adjusted" --datum free \
     --self_calibration "$self_calibration" --num_threads "$threads"
   "$BAYON" evaluate --input_path "$ws/adjusted" --ground_truth_path \
@@ -93,33 +84,20 @@ printf '\n%-9s %-7s %10s %10s %10s %10s %10s %8s %8s\n' set program \
   registered "centre RMS" "centre max" "centre %" "rot RMS" time "peak"
 printf '%-9s %-7s %10s %10s %10s %10s %10s %8s %8s\n' "" "" "" mm mm "" deg s MB
 for name in temple fountain; do
-  python3 - "$dir/$name" "$baseline/$name" "$name" <<'EOF'
-import json, re, sys
-ws, base, name = sys.argv[1:4]
-def wall_and_peak(logs):
-    total, peak = 0.0, 0
-    for log in logs:
-        text = open(log + ".time").read()
-        clock = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)",
-                          text).group(1)
-        seconds = 0.0
-        for part in clock.split(":"):
-            seconds = seconds * 60 + float(part)
-        total += seconds
-        peak = max(peak, int(re.search(r"Maximum resident set size \(kbytes\): (\d+)",
-                                       text).group(1)))
-    return total, peak / 1024
-rows = [("bayon", ws, [ws + "/" + s for s in
-         ("features", "match", "relative", "disparity", "tiepoints", "strip",
-          "adjust")]),
-        ("colmap", base, [base + "/" + s for s in ("features", "matches", "mapper")])]
-for program, folder, logs in rows:
+  ws="$dir/$name" base="$baseline/$name"
+  read -r b_time b_peak < <(totals "$ws"/{features,match,relative,disparity,tiepoints,strip,adjust})
+  read -r c_time c_peak < <(totals "$base"/{features,matches,mapper})
+  python3 - "$name" "$ws" "$b_time" "$b_peak" "$base" "$c_time" "$c_peak" <<'EOF'
+import json, sys
+name = sys.argv[1]
+for program, (folder, seconds, peak) in zip(
+        ("bayon", "colmap"), (sys.argv[2:5], sys.argv[5:8])):
     e = json.load(open(folder + "/evaluation.json"))["sparse"]
-    seconds, peak = wall_and_peak(logs)
-    print("%-9s %-7s %6d/%-3d %10.3f %10.3f %10.4f %10.4f %8.1f %8.0f"
+    print("%-9s %-7s %6d/%-3d %10.3f %10.3f %10.4f %10.4f %8.1f %8s"
           % (name, program, e["num_registered"], e["num_truth_images"],
              1000 * e["center_rms"], 1000 * e["center_max"],
-             100 * e["center_rms_relative"], e["rotation_rms_deg"], seconds, peak))
+             100 * e["center_rms_relative"], e["rotation_rms_deg"],
+             float(seconds), peak))
 EOF
 done
 echo

@@ -17,19 +17,7 @@ data="$BAYON_DATA_DIR"
 threads="${BAYON_THREADS:-2}"
 mkdir -p "$dir"
 
-# run LOG COMMAND...: the command's output to LOG.log, /usr/bin/time to LOG.time.
-run() {
-  local log="$1"
-  shift
-  if ! /usr/bin/time -v -o "$log.time" "$@" >"$log.log" 2>&1; then
-    echo "failed: $*; see $log.log" >&2
-    return 1
-  fi
-}
-wall() {
-  sed -n 's/.*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "$1.time" |
-    awk -F: '{ s = 0; for (i = 1; i <= NF; ++i) s = s * 60 + $i; print s }'
-}
+source "$(dirname "$0")/lib/timing.sh"
 # The mapper's model with the most registered images (images.bin starts
 # with their number).
 largest_model() {
@@ -55,14 +43,14 @@ baseline() {
   [ "$format" = strecha ] && image_path_flag=(--image_path "$images")
   "$BAYON" import_ground_truth --format "$format" --input_path "$truth_input" \
     --output_path "$ws/truth" "${image_path_flag[@]}" >"$ws/truth.log" 2>&1
-  run "$ws/features" colmap feature_extractor --database_path "$ws/database.db" \
+  timed "$ws/features" colmap feature_extractor --database_path "$ws/database.db" \
     --image_path "$images" --ImageReader.single_camera 1 \
     --ImageReader.camera_model PINHOLE --SiftExtraction.use_gpu 0 \
     --SiftExtraction.max_image_size "$max_size" \
     --SiftExtraction.num_threads "$threads"
-  run "$ws/matches" colmap exhaustive_matcher --database_path "$ws/database.db" \
+  timed "$ws/matches" colmap exhaustive_matcher --database_path "$ws/database.db" \
     --SiftMatching.use_gpu 0 --SiftMatching.num_threads "$threads"
-  run "$ws/mapper" colmap mapper --database_path "$ws/database.db" \
+  timed "$ws/mapper" colmap mapper --database_path "$ws/database.db" \
     --image_path "$images" --output_path "$ws/sparse" \
     --Mapper.num_threads "$threads"
   local model
@@ -90,8 +78,8 @@ printf '%-9s %7s %8s %6s %10s %9s %9s %9s %9s %10s %10s %10s %10s\n' \
   "" s s s "" "" px px px mm mm "" deg
 for name in temple fountain; do
   ws="$dir/$name"
-  python3 - "$ws" "$name" "$(wall "$ws/features")" "$(wall "$ws/matches")" \
-    "$(wall "$ws/mapper")" <<'EOF'
+  python3 - "$ws" "$name" "$(wall_s "$ws/features")" "$(wall_s "$ws/matches")" \
+    "$(wall_s "$ws/mapper")" <<'EOF'
 import json, re, sys
 ws, name, t_extract, t_match, t_map = sys.argv[1:6]
 e = json.load(open(ws + "/evaluation.json"))["sparse"]

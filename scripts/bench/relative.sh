@@ -27,22 +27,7 @@ dir="$BAYON_BUILD/bench/relative"
 rm -rf "$dir"
 mkdir -p "$dir/bayon" "$dir/colmap"
 
-# run LABEL COMMAND...: times the command into $dir/LABEL.{log,time}.
-run() {
-  local label="$1"
-  shift
-  if ! /usr/bin/time -v -o "$dir/$label.time" "$@" >"$dir/$label.log" 2>&1; then
-    echo "$label failed, see $dir/$label.log" >&2
-    return 1
-  fi
-}
-wall() {
-  sed -n 's/.*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "$dir/$1.time" |
-    awk -F: '{ s = 0; for (i = 1; i <= NF; ++i) s = s * 60 + $i; print s }'
-}
-peak_mb() {
-  echo $(($(sed -n 's/.*Maximum resident set size (kbytes): //p' "$dir/$1.time") / 1024))
-}
+source "$(dirname "$0")/lib/timing.sh"
 # What a database holds: keypoints, matched pairs, matches, verified pairs,
 # inlier matches.
 counts() {
@@ -62,41 +47,33 @@ EOF
 bdb="$dir/bayon/database.db"
 "$BAYON" import --image_path "$images" --database_path "$bdb" --single_camera 1 \
   --log_path "$dir/bayon/import.log" >/dev/null
-run bayon_features "$BAYON" features --database_path "$bdb" --image_path "$images"
+timed "$dir/bayon_features" "$BAYON" features --database_path "$bdb" --image_path "$images"
 ldb="$dir/bayon/lsm.db"
 cp "$bdb" "$ldb"
-run bayon_match "$BAYON" match --database_path "$bdb" --image_path "$images" \
+timed "$dir/bayon_match" "$BAYON" match --database_path "$bdb" --image_path "$images" \
   --pairing exhaustive
-run bayon_relative "$BAYON" relative --database_path "$bdb"
-run bayon_lsm_match "$BAYON" match --database_path "$ldb" --image_path "$images" \
+timed "$dir/bayon_relative" "$BAYON" relative --database_path "$bdb"
+timed "$dir/bayon_lsm_match" "$BAYON" match --database_path "$ldb" --image_path "$images" \
   --pairing exhaustive --lsm_refinement 1 --log_path "$dir/bayon/lsm_match.log"
-run bayon_lsm_relative "$BAYON" relative --database_path "$ldb" \
+timed "$dir/bayon_lsm_relative" "$BAYON" relative --database_path "$ldb" \
   --log_path "$dir/bayon/lsm_relative.log"
 
 # --- COLMAP
 cdb="$dir/colmap/database.db"
-run colmap_features colmap feature_extractor --database_path "$cdb" \
+timed "$dir/colmap_features" colmap feature_extractor --database_path "$cdb" \
   --image_path "$images" --ImageReader.single_camera 1 --SiftExtraction.use_gpu 0
-run colmap_match colmap exhaustive_matcher --database_path "$cdb" \
+timed "$dir/colmap_match" colmap exhaustive_matcher --database_path "$cdb" \
   --SiftMatching.use_gpu 0
 
 read -r b_kp b_pairs b_matches b_verified b_inliers < <(counts "$bdb")
 read -r l_kp l_pairs l_matches l_verified l_inliers < <(counts "$ldb")
 read -r c_kp c_pairs c_matches c_verified c_inliers < <(counts "$cdb")
 row() {
-  printf '%-34s %8.1f %8s\n' "$1" "$(wall "$2")" "$(peak_mb "$2")"
+  printf '%-34s %8.1f %8s\n' "$1" "$(wall_s "$dir/$2")" "$(peak_mb "$dir/$2")"
 }
-total() {
-  local t=0 m=0 label
-  for label in "$@"; do
-    t=$(awk -v a="$t" -v b="$(wall "$label")" 'BEGIN { print a + b }')
-    m=$(awk -v a="$m" -v b="$(peak_mb "$label")" 'BEGIN { print (b > a ? b : a) }')
-  done
-  echo "$t $m"
-}
-read -r b_total b_peak < <(total bayon_features bayon_match bayon_relative)
-read -r l_total l_peak < <(total bayon_features bayon_lsm_match bayon_lsm_relative)
-read -r c_total c_peak < <(total colmap_features colmap_match)
+read -r b_total b_peak < <(totals "$dir"/{bayon_features,bayon_match,bayon_relative})
+read -r l_total l_peak < <(totals "$dir"/{bayon_features,bayon_lsm_match,bayon_lsm_relative})
+read -r c_total c_peak < <(totals "$dir"/{colmap_features,colmap_match})
 
 echo "sceaux-castle: 11 images 2832 x 2128, all pairs, CPU ($(nproc) cores)"
 printf '%-34s %8s %8s\n' "stage" "time s" "peak MB"
