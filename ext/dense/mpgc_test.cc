@@ -228,49 +228,34 @@ TEST(Mpgc, ApproximationsAlongTheMasterRay) {
 
 TEST(Mpgc, FailuresSayWhy) {
   const PlaneScene scene(2.0);
-  // The template leaves the master image.
-  EXPECT_EQ(MatchMpgc(scene.View(0),
-                      Eigen::Vector2d(2.5, 2.5),
-                      scene.SearchViews(),
-                      Eigen::Vector3d(0, 0, 0),
-                      MpgcOptions())
-                .status,
-            MpgcStatus::kOutsideImage);
-  // An approximation behind the master.
-  EXPECT_EQ(MatchMpgc(scene.View(0),
-                      Eigen::Vector2d(160.5, 120.5),
-                      scene.SearchViews(),
-                      Eigen::Vector3d(0, 0, 8),
-                      MpgcOptions())
-                .status,
-            MpgcStatus::kBehindCamera);
-  // A flat master patch.
   PlaneScene flat(0.0);
   flat.images[0].setTo(100);
-  EXPECT_EQ(MatchMpgc(flat.View(0),
-                      Eigen::Vector2d(160.5, 120.5),
-                      flat.SearchViews(),
-                      Eigen::Vector3d(0, 0, 0),
-                      MpgcOptions())
-                .status,
+  const Eigen::Vector2d centre(160.5, 120.5);
+  const auto match = [](const PlaneScene& s,
+                        const Eigen::Vector2d& xy,
+                        const Eigen::Vector3d& approximation,
+                        const MpgcOptions& options = MpgcOptions()) {
+    return MatchMpgc(s.View(0), xy, s.SearchViews(), approximation, options)
+        .status;
+  };
+  // The template leaves the master image.
+  EXPECT_EQ(match(scene, Eigen::Vector2d(2.5, 2.5), Eigen::Vector3d::Zero()),
+            MpgcStatus::kOutsideImage);
+  // An approximation behind the master.
+  EXPECT_EQ(match(scene, centre, Eigen::Vector3d(0, 0, 8)),
+            MpgcStatus::kBehindCamera);
+  // A flat master patch.
+  EXPECT_EQ(match(flat, centre, Eigen::Vector3d::Zero()),
             MpgcStatus::kFlatPatch);
   EpipolarSearchOptions bad_search;
   bad_search.step_px = 0;
-  EXPECT_THROW(SearchMasterRay(scene.View(0),
-                               Eigen::Vector2d(160.5, 120.5),
-                               scene.SearchViews(),
-                               3.5,
-                               4.5,
-                               bad_search),
-               InputError);
+  EXPECT_THROW(
+      SearchMasterRay(
+          scene.View(0), centre, scene.SearchViews(), 3.5, 4.5, bad_search),
+      InputError);
   MpgcOptions bad;
   bad.geometric_sigma_px = 0;
-  EXPECT_THROW(MatchMpgc(scene.View(0),
-                         Eigen::Vector2d(160.5, 120.5),
-                         scene.SearchViews(),
-                         Eigen::Vector3d(0, 0, 0),
-                         bad),
-               InputError);
+  EXPECT_THROW(match(scene, centre, Eigen::Vector3d::Zero(), bad), InputError);
 }
 
 }  // namespace
