@@ -256,6 +256,37 @@ TEST(BadInput, ConfigFileWithUnknownKey) {
   EXPECT_EQ(db.NumImages(), 2);
 }
 
+// import --camera_params: a calibrated camera in COLMAP's parameter order;
+// the wrong number of values, or a model bayon calibrates itself, is refused
+// before anything is written.
+TEST(BadInput, CameraParamsOfTheWrongCount) {
+  const std::string dir = testing::TempDir("bad_camera_params");
+  const std::string images = MakeImages(dir + "/images");
+  const std::vector<std::string> import = {"import",
+                                           "--image_path",
+                                           images,
+                                           "--database_path",
+                                           dir + "/db.db",
+                                           "--single_camera",
+                                           "1",
+                                           "--camera_model"};
+  std::vector<std::string> args = import;
+  args.insert(args.end(), {"PINHOLE", "--camera_params", "70,70,32"});
+  ExpectRefused(args, "3 values, but PINHOLE has 4 parameters", {images});
+  args = import;
+  args.insert(args.end(), {"BROWN_BEYER", "--camera_params", "35,0,0"});
+  ExpectRefused(args, "BROWN_BEYER", {images});
+  EXPECT_FALSE(fs::exists(dir + "/db.db"));
+  args = import;
+  args.insert(args.end(), {"PINHOLE", "--camera_params", "70.5,71.25,31,23"});
+  const testing::CommandResult ok = testing::RunBayon(args);
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  Database db(dir + "/db.db", Database::Mode::kReadOnly);
+  const Camera camera = db.ReadCamera(1);
+  EXPECT_EQ(camera.params, std::vector<double>({70.5, 71.25, 31, 23}));
+  EXPECT_TRUE(camera.has_prior_focal_length);
+}
+
 TEST(BadInput, UnknownFlagAndUnknownCommand) {
   const testing::CommandResult flag = testing::RunBayon({"import",
                                                          "--image_path",

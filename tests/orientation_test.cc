@@ -94,14 +94,9 @@ void MatchWithCalibratedCamera(const std::string& images,
        "--single_camera",
        "1",
        "--camera_model",
-       "PINHOLE"});
-  {
-    Database database(db, Database::Mode::kReadWrite);
-    Camera camera = database.ReadCamera(1);
-    camera.params = params;
-    camera.has_prior_focal_length = true;
-    database.UpdateCamera(camera);
-  }
+       "PINHOLE",
+       "--camera_params",
+       testing::CommaSeparated(params)});
   Run({"features", "--database_path", db, "--image_path", images});
   std::vector<std::string> match = {
       "match", "--database_path", db, "--image_path", images};

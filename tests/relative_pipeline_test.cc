@@ -409,14 +409,9 @@ TEST(RelativePipeline, StockMapperRegistersTheTempleFromBayonsDatabase) {
          "--single_camera",
          "1",
          "--camera_model",
-         "PINHOLE"});
-  {
-    Database database(db, Database::Mode::kReadWrite);
-    Camera camera = database.ReadCamera(1);
-    camera.params = truth.cameras.begin()->second.params;
-    camera.has_prior_focal_length = true;
-    database.UpdateCamera(camera);
-  }
+         "PINHOLE",
+         "--camera_params",
+         testing::CommaSeparated(truth.cameras.begin()->second.params)});
   RunOk({"features",
          "--database_path",
          db,
@@ -526,12 +521,9 @@ std::string BadPairsWorkspace(const std::string& dir) {
          "--single_camera",
          "1",
          "--camera_model",
-         "PINHOLE"});
-  Database database(db, Database::Mode::kReadWrite);
-  Camera camera = database.ReadCamera(1);
-  camera.params = {1520.4, 1525.9, 302.82, 247.37};
-  camera.has_prior_focal_length = true;
-  database.UpdateCamera(camera);
+         "PINHOLE",
+         "--camera_params",
+         "1520.4,1525.9,302.82,247.37"});
   return dir;
 }
 

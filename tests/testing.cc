@@ -7,6 +7,8 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -140,6 +142,15 @@ std::string SharedFixture(
   ::flock(lock_fd, LOCK_UN);
   ::close(lock_fd);
   return dir.string();
+}
+
+std::string CommaSeparated(const std::vector<double>& values) {
+  std::ostringstream text;
+  text << std::setprecision(17);
+  for (size_t i = 0; i < values.size(); ++i) {
+    text << (i > 0 ? "," : "") << values[i];
+  }
+  return text.str();
 }
 
 void CopyTree(const std::string& from, const std::string& to) {

@@ -52,6 +52,10 @@ std::string SharedFixture(const std::string& name,
 // Copies a folder or file.
 void CopyTree(const std::string& from, const std::string& to);
 
+// "v1,v2,...": numbers as a comma-separated command-line value, to the last
+// digit (e.g. import --camera_params).
+std::string CommaSeparated(const std::vector<double>& values);
+
 }  // namespace testing
 }  // namespace bayon
 

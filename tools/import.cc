@@ -12,6 +12,7 @@
 
 #include <filesystem>
 #include <map>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -28,6 +29,10 @@ struct ImportOptions {
   double pixel_size_um = 0;
   // COLMAP's guess without any prior: f = factor * max(width, height).
   double default_focal_length_factor = 1.2;
+  // A calibrated camera: every parameter of camera_model in COLMAP's order
+  // (COLMAP's --ImageReader.camera_params); its focal length counts as
+  // known.
+  std::vector<double> camera_params;
   std::string log_path;
 
   void Check() const {
@@ -51,6 +56,31 @@ struct ImportOptions {
       ThrowInputError(
           "--camera_model BROWN_BEYER needs --pixel_size_um (and "
           "--focal_length_mm): the camera works in millimetres");
+    }
+    if (!camera_params.empty()) {
+      if (*model == CameraModelId::kBrownBeyer) {
+        ThrowInputError(
+            "--camera_params: BROWN_BEYER cameras are calibrated by bayon "
+            "adjust (calibration.json), not given as COLMAP parameters");
+      }
+      if (focal_length_mm > 0) {
+        ThrowInputError(
+            "--camera_params and --focal_length_mm both give the focal "
+            "length; give one");
+      }
+      const size_t expected =
+          static_cast<size_t>(CameraModelInfoFor(*model).num_params);
+      if (camera_params.size() != expected) {
+        ThrowInputError("--camera_params: ",
+                        camera_params.size(),
+                        " values, but ",
+                        camera_model,
+                        " has ",
+                        expected,
+                        " parameters (",
+                        CameraModelInfoFor(*model).params_info,
+                        ")");
+      }
     }
     CheckOption(default_focal_length_factor > 0,
                 "--default_focal_length_factor",
@@ -103,6 +133,10 @@ Camera MakeCamera(const ImportOptions& options, const ImageFacts& fact) {
   Camera camera = Camera::Create(
       model, focal, fact.width, fact.height, options.pixel_size_um / 1000.0);
   camera.has_prior_focal_length = prior;
+  if (!options.camera_params.empty()) {
+    camera.params = options.camera_params;
+    camera.has_prior_focal_length = true;
+  }
   return camera;
 }
 
@@ -134,6 +168,11 @@ int RunImport(int argc, char** argv) {
   app.add_option("--pixel_size_um",
                  options.pixel_size_um,
                  "Pixel pitch on the sensor or scan, micrometres");
+  app.add_option("--camera_params",
+                 options.camera_params,
+                 "A calibrated camera: the model's parameters in COLMAP's "
+                 "order, e.g. PINHOLE fx,fy,cx,cy (focal length known)")
+      ->delimiter(',');
   app.add_option("--default_focal_length_factor",
                  options.default_focal_length_factor,
                  "Focal length guess without prior, times the long side");

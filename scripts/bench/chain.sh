@@ -41,20 +41,12 @@ chain() {
   [ "$format" = strecha ] && image_path_flag=(--image_path "$images")
   "$BAYON" import_ground_truth --format "$format" --input_path "$truth_input" \
     --output_path "$ws/truth" "${image_path_flag[@]}" >"$ws/truth.log" 2>&1
-  timed "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
-    --single_camera 1 --camera_model PINHOLE
-  # The calibrated camera (the truth's, PINHOLE fx fy cx cy) as a known
-  # focal length.
+  # The calibrated camera: the truth's PINHOLE fx fy cx cy.
   local params
   params=$(grep -v '^#' "$ws/truth/cameras.txt" | head -1 |
     awk '{ print $5 "," $6 "," $7 "," $8 }')
-  python3 - "$db" "$params" <<'EOF'
-import sqlite3, struct, sys
-db, params = sys.argv[1], [float(v) for v in sys.argv[2].split(",")]
-with sqlite3.connect(db) as c:
-    c.execute("update cameras set params = ?, prior_focal_length = 1",
-              (struct.pack("<4d", *params),))
-EOF
+  timed "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
+    --single_camera 1 --camera_model PINHOLE --camera_params "$params"
   timed "$ws/features" "$BAYON" features --database_path "$db" \
     --image_path "$images" --num_threads "$threads"
   timed "$ws/match" "$BAYON" match --database_path "$db" --image_path "$images" \
