@@ -116,16 +116,6 @@ namespace {
 
 constexpr double kMadToSigma = 1.4826;
 
-double Quantile(std::vector<double> values, double q) {
-  if (values.empty()) return 0;
-  const size_t k = std::min(
-      values.size() - 1,
-      static_cast<size_t>(std::ceil(q * static_cast<double>(values.size()))) -
-          (q > 0 ? 1 : 0));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
-
 // The epipolar line of one image-1 point (see the header): rays
 // q(w) = A - w E of image 2, plane points m = c2 q_xy / (-q_z).
 struct EpipolarLine {
