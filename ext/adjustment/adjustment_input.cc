@@ -17,10 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <map>
-
-namespace fs = std::filesystem;
 
 namespace bayon {
 namespace {
@@ -189,16 +186,6 @@ std::map<ObservationKey, Eigen::Matrix2d> TakeTiePointsFromDatabase(
   return covariances;
 }
 
-std::map<camera_t, Camera> CalibrationsBesideModel(const std::string& path) {
-  std::map<camera_t, Camera> cameras;
-  const std::string json = path + "/calibration.json";
-  if (!fs::exists(json)) return cameras;
-  for (const CalibrationEntry& entry : ReadCalibrationJson(json)) {
-    cameras[entry.camera.camera_id] = entry.camera;
-  }
-  return cameras;
-}
-
 }  // namespace
 
 std::vector<TiePointRecord> ReadTiePointsFor(Database* database,
@@ -313,7 +300,8 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
                                             options.min_tie_sigma_px,
                                             &scene);
   }
-  const std::map<camera_t, Camera> beside = CalibrationsBesideModel(input_path);
+  const std::map<camera_t, Camera> beside =
+      ReadCalibrationsBesideModel(input_path);
   std::map<camera_t, CalibrationRecord> calibrations;
   std::map<image_t, InteriorRecord> interiors;
   if (BayonTableExists(&database, kCalibrationTable.name)) {

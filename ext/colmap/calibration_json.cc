@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <sstream>
 
 namespace bayon {
@@ -167,6 +168,17 @@ std::vector<CalibrationEntry> ReadCalibrationJson(const std::string& path) {
     }
   }
   return entries;
+}
+
+std::map<camera_t, Camera> ReadCalibrationsBesideModel(
+    const std::string& model_path) {
+  std::map<camera_t, Camera> cameras;
+  const std::string json = model_path + "/calibration.json";
+  if (!std::filesystem::exists(json)) return cameras;
+  for (const CalibrationEntry& entry : ReadCalibrationJson(json)) {
+    cameras[entry.camera.camera_id] = entry.camera;
+  }
+  return cameras;
 }
 
 }  // namespace bayon

@@ -50,4 +50,10 @@ void WriteCalibrationJson(const std::string& path,
 // Throws InputError naming the file and the entry that is wrong.
 std::vector<CalibrationEntry> ReadCalibrationJson(const std::string& path);
 
+// The full calibrations in `<model_path>/calibration.json`, by camera id;
+// empty where the model has no such file (a stock COLMAP model, whose
+// cameras rows are the whole calibration).
+std::map<camera_t, Camera> ReadCalibrationsBesideModel(
+    const std::string& model_path);
+
 }  // namespace bayon
