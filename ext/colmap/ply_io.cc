@@ -661,4 +661,44 @@ void WriteMeshPly(const TriangleMesh& mesh,
                           Body(mesh.vertices, &mesh, options));
 }
 
+void WriteColmapFusedPly(const PointCloud& cloud,
+                         const std::string& path,
+                         const std::string& comment,
+                         const std::vector<std::vector<uint32_t>>* visibility) {
+  PointCloud fused;
+  fused.positions = cloud.positions;
+  fused.normals = cloud.normals;
+  fused.colors = cloud.colors;
+  if (!fused.HasColors()) {
+    fused.colors.assign(cloud.size(),
+                        Eigen::Matrix<uint8_t, 3, 1>(128, 128, 128));
+  }
+  PlyWriteOptions options;
+  options.double_coordinates = false;
+  options.comment = comment;
+  if (visibility != nullptr) {
+    if (visibility->size() != cloud.size()) {
+      ThrowInputError(path,
+                      ": visibility for ",
+                      visibility->size(),
+                      " points, but the cloud has ",
+                      cloud.size());
+    }
+    // COLMAP's layout: uint64 count, then per point a uint32 count and
+    // that many uint32 image indices, little-endian (as on every machine
+    // bayon builds for).
+    std::string vis;
+    const auto put = [&vis](auto value) {
+      vis.append(reinterpret_cast<const char*>(&value), sizeof(value));
+    };
+    put(static_cast<uint64_t>(visibility->size()));
+    for (const std::vector<uint32_t>& images : *visibility) {
+      put(static_cast<uint32_t>(images.size()));
+      for (uint32_t index : images) put(index);
+    }
+    WriteFileAtomically(path + ".vis", vis);
+  }
+  WritePointCloudPly(fused, path, options);
+}
+
 }  // namespace bayon

@@ -12,7 +12,9 @@
 
 #include "ext/core/point_cloud.h"
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace bayon {
 
@@ -43,5 +45,20 @@ void WritePointCloudPly(const PointCloud& cloud,
 void WriteMeshPly(const TriangleMesh& mesh,
                   const std::string& path,
                   const PlyWriteOptions& options = {});
+
+// COLMAP's `fused.ply` (what `colmap stereo_fusion` writes and
+// `colmap poisson_mesher` reads): float x y z, nx ny nz and uchar colours
+// (grey where the cloud has none; PoissonRecon with COLMAP's default
+// --PoissonMeshing.color refuses a file without them), no other properties.
+// With `visibility`, also `<path>.vis`: per point the indices of the images
+// that see it, indices into the sparse model's image list (0-based, in the
+// order of its images file), as COLMAP's fusion writes them for
+// `colmap delaunay_mesher`. The .vis first, so that a complete fused.ply
+// implies a complete .vis beside it.
+void WriteColmapFusedPly(
+    const PointCloud& cloud,
+    const std::string& path,
+    const std::string& comment,
+    const std::vector<std::vector<uint32_t>>* visibility = nullptr);
 
 }  // namespace bayon

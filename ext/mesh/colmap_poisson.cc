@@ -38,23 +38,9 @@ TriangleMesh ColmapPoissonMesh(const PointCloud& cloud,
     }
   } remove{folder, temporary};
 
-  // COLMAP's fused.ply: float x y z, normals and colours (PoissonRecon,
-  // called with COLMAP's default --PoissonMeshing.color, refuses a file
-  // without them: grey where the cloud has none).
-  PointCloud fused;
-  fused.positions = cloud.positions;
-  fused.normals = cloud.normals;
-  fused.colors = cloud.colors;
-  if (!fused.HasColors()) {
-    fused.colors.assign(cloud.size(),
-                        Eigen::Matrix<uint8_t, 3, 1>(128, 128, 128));
-  }
-  PlyWriteOptions write_options;
-  write_options.double_coordinates = false;
-  write_options.comment = "bayon mesh --method colmap_poisson";
   const std::string input = folder + "/fused.ply";
   const std::string output = folder + "/meshed-poisson.ply";
-  WritePointCloudPly(fused, input, write_options);
+  WriteColmapFusedPly(cloud, input, "bayon mesh --method colmap_poisson");
 
   ColmapCall call;
   call.command = "poisson_mesher";
