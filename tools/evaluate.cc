@@ -163,7 +163,7 @@ void PrintTopology(const char* label, const MeshTopology& t) {
 
 // The truth files: explicit paths win, else the members of a gt/ folder.
 struct TruthPaths {
-  std::string model, surface, texture, heldout, calibration, synth_json;
+  std::string model, surface, ground, texture, heldout, calibration, synth_json;
 };
 
 TruthPaths FindTruth(const std::string& ground_truth_path) {
@@ -179,6 +179,7 @@ TruthPaths FindTruth(const std::string& ground_truth_path) {
   truth.model = fs::is_directory(root / "sparse") ? (root / "sparse").string()
                                                   : root.string();
   truth.surface = member("surface.ply");
+  truth.ground = member("ground.ply");
   truth.heldout = member("heldout");
   truth.calibration = member("calibration.json");
   truth.synth_json = member("synth.json");
@@ -205,6 +206,21 @@ void ReadSynthDescription(const std::string& path,
   }
 }
 
+// The triangles of several meshes in one (positions and faces only).
+TriangleMesh MergedGeometry(const std::vector<const TriangleMesh*>& meshes) {
+  TriangleMesh merged;
+  for (const TriangleMesh* mesh : meshes) {
+    const int offset = static_cast<int>(merged.vertices.size());
+    merged.vertices.positions.insert(merged.vertices.positions.end(),
+                                     mesh->vertices.positions.begin(),
+                                     mesh->vertices.positions.end());
+    for (const Eigen::Vector3i& face : mesh->faces) {
+      merged.faces.push_back(face + Eigen::Vector3i::Constant(offset));
+    }
+  }
+  return merged;
+}
+
 void Transform(const Sim3d& b_from_a, PointCloud* cloud) {
   for (Eigen::Vector3d& p : cloud->positions) p = b_from_a * p;
   for (Eigen::Vector3f& n : cloud->normals) {
@@ -217,6 +233,7 @@ void Transform(const Sim3d& b_from_a, PointCloud* cloud) {
 int RunEvaluate(int argc, char** argv) {
   std::string input_path, ground_truth_path, output_path, label;
   std::string calibration_path, surface_path, cloud_path, mesh_path;
+  std::string cloud_errors_path;
   std::string textured_mesh_path, texture_path, heldout_path, render_path;
   bool align = true;
   double gsd_m = 0, threshold_m = 0, threshold_gsd = 2;
@@ -239,6 +256,10 @@ int RunEvaluate(int argc, char** argv) {
                  calibration_path,
                  "calibration.json of the model (default: the one beside it)");
   app.add_option("--cloud_path", cloud_path, "Dense cloud (PLY) to evaluate");
+  app.add_option("--cloud_errors_path",
+                 cloud_errors_path,
+                 "Write the cloud, in the truth's frame, with each point's "
+                 "distance to the true surface (PLY attribute distance_m)");
   app.add_option("--mesh_path", mesh_path, "Mesh (PLY) to evaluate");
   app.add_option("--textured_mesh_path",
                  textured_mesh_path,
@@ -330,7 +351,16 @@ int RunEvaluate(int argc, char** argv) {
                       "(give --surface_path)");
     }
     const TriangleMesh surface = ReadMeshPly(surface_path);
-    const MeshDistance truth_distance(surface);
+    // Accuracy against everything the photographs show: a point on the
+    // ground around the object is judged against the ground, not against
+    // the object's nearest face. Completeness stays the object's.
+    const bool with_ground =
+        !found.ground.empty() && surface_path == found.surface;
+    const TriangleMesh ground =
+        with_ground ? ReadMeshPly(found.ground) : TriangleMesh();
+    const MeshDistance truth_distance(
+        with_ground ? MergedGeometry({&surface, &ground}) : surface);
+    if (with_ground) report["accuracy_includes_ground"] = found.ground;
     SurfaceEvaluationOptions options;
     options.gsd_m = gsd_m;
     options.region = region;
@@ -394,6 +424,17 @@ int RunEvaluate(int argc, char** argv) {
                         .c_str());
         report["cloud"] = SurfaceToJson(e);
         report["cloud"]["path"] = cloud_path;
+        if (!cloud_errors_path.empty()) {
+          // Every point with its distance to the truth, in the truth's
+          // frame: where the errors are, to look at.
+          PointAttribute& distance =
+              cloud.AddAttribute("distance_m", PlyScalarType::kFloat);
+          distance.values =
+              truth_distance.Distances(cloud.positions, num_threads);
+          PlyWriteOptions write_options;
+          write_options.comment = "bayon evaluate: distance_m to the truth";
+          WritePointCloudPly(cloud, cloud_errors_path, write_options);
+        }
       }
       if (!mesh_path.empty()) {
         TriangleMesh mesh = ReadMeshPly(mesh_path);
