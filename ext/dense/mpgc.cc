@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <numeric>
 #include <optional>
 
 namespace bayon {
@@ -50,6 +52,8 @@ void EpipolarSearchOptions::Check() const {
               min_ncc);
   CheckOption(
       min_views >= 1, "EpipolarSearchOptions.min_views", ">= 1", min_views);
+  CheckOption(
+      best_views >= 0, "EpipolarSearchOptions.best_views", ">= 0", best_views);
 }
 
 const char* MpgcStatusName(MpgcStatus status) {
@@ -311,9 +315,10 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   };
   std::vector<double> score(n, -2);
   std::vector<int> views(n, 0);
+  std::vector<double> correlations;
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector3d xyz = origin + distance_of(k) * direction;
-    double sum = 0;
+    correlations.clear();
     for (const MpgcView& view : search) {
       Eigen::Vector2d xy;
       Eigen::Matrix2d shape;
@@ -326,10 +331,21 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
                           &correlation)) {
         continue;
       }
-      sum += correlation;
-      ++views[k];
+      correlations.push_back(correlation);
     }
-    if (views[k] >= options.min_views) score[k] = sum / views[k];
+    views[k] = static_cast<int>(correlations.size());
+    if (views[k] < options.min_views) continue;
+    int used = views[k];
+    if (options.best_views > 0 && options.best_views < used) {
+      used = options.best_views;
+      std::nth_element(correlations.begin(),
+                       correlations.begin() + (used - 1),
+                       correlations.end(),
+                       std::greater<double>());
+    }
+    score[k] = std::accumulate(
+                   correlations.begin(), correlations.begin() + used, 0.0) /
+               used;
   }
   const int best = static_cast<int>(
       std::max_element(score.begin(), score.end()) - score.begin());

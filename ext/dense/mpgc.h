@@ -116,6 +116,10 @@ struct EpipolarSearchOptions {
   // The best mean correlation must reach this, over at least min_views.
   double min_ncc = 0.6;
   int min_views = 1;
+  // The score of a sample is the mean over its best_views best-correlating
+  // views (0: all views where it projects inside), so that a view in which
+  // the point is hidden or lit otherwise does not drown the others.
+  int best_views = 0;
   void Check() const;  // throws InputError naming field, value, rule
 };
 
