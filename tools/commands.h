@@ -16,6 +16,7 @@ int RunModelConverter(int argc, char** argv);
 int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);
 int RunFeatures(int argc, char** argv);
+int RunDense(int argc, char** argv);
 int RunEdit(int argc, char** argv);
 int RunMesh(int argc, char** argv);
 int RunSynthCloud(int argc, char** argv);

@@ -1,0 +1,825 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/dense/dense.h"
+
+#include "ext/adjustment/triangulation.h"
+#include "ext/core/errors.h"
+#include "ext/core/parallel.h"
+#include "ext/core/progress.h"
+#include "ext/core/statistics.h"
+#include "ext/features/moravec.h"
+#include "ext/image/image_io.h"
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+namespace bayon {
+
+DenseOptions::DenseOptions() {
+  // 11 x 11 patches: enough texture for the eight parameters per search
+  // patch on the tower's stone, a quarter of the arithmetic of lsm.h's 15.
+  mpgc.lsm.patch_radius = 5;
+  // A point needs three images: two-image points have no check on a false
+  // match but the grey values.
+  mpgc.min_search_views = 2;
+  // The two best views: a ring has a neighbour on each side, and a point
+  // hidden on one side is still seen on the other.
+  search.best_views = 2;
+  // Patch centres that move less than this between iterations have
+  // converged: a fifth of the precision dense points reach.
+  mpgc.convergence_px = 0.02;
+}
+
+void DenseOptions::Check() const {
+  CheckOption(
+      highpass_sigma_px >= 0, "--highpass_sigma_px", ">= 0", highpass_sigma_px);
+  CheckOption(num_masters >= 1, "--num_masters", ">= 1", num_masters);
+  CheckOption(
+      num_search_images >= 1, "--num_search_images", ">= 1", num_search_images);
+  CheckOption(max_search_angle_deg > 0 && max_search_angle_deg < 180,
+              "--max_search_angle_deg",
+              "in (0, 180)",
+              max_search_angle_deg);
+  CheckOption(cell_size >= 1, "--cell_size", ">= 1", cell_size);
+  CheckOption(moravec_window >= 3 && moravec_window % 2 == 1,
+              "--moravec_window",
+              "odd and >= 3",
+              moravec_window);
+  CheckOption(min_interest >= 0, "--min_interest", ">= 0", min_interest);
+  CheckOption(coarse_step >= 1, "--coarse_step", ">= 1", coarse_step);
+  CheckOption(band_tolerance >= 0, "--band_tolerance", ">= 0", band_tolerance);
+  CheckOption(
+      band_radius_cells >= 1, "--band_radius_cells", ">= 1", band_radius_cells);
+  CheckOption(min_depth >= 0 && max_depth >= 0 &&
+                  (max_depth == 0 || max_depth > min_depth),
+              "--max_depth",
+              "0 (from the sparse points) or > --min_depth >= 0",
+              max_depth);
+  CheckOption(depth_margin >= 0, "--depth_margin", ">= 0", depth_margin);
+  CheckOption(
+      sparse_radius_px > 0, "--sparse_radius_px", "> 0", sparse_radius_px);
+  CheckOption(
+      sparse_tolerance >= 0, "--sparse_tolerance", ">= 0", sparse_tolerance);
+  CheckOption(max_sigma_gsd > 0, "--max_sigma_gsd", "> 0", max_sigma_gsd);
+  CheckOption(surface_radius_cells >= 1,
+              "--surface_radius_cells",
+              ">= 1",
+              surface_radius_cells);
+  CheckOption(off_surface_gsd > 0, "--off_surface_gsd", "> 0", off_surface_gsd);
+  search.Check();
+  mpgc.Check();
+}
+
+const char* DenseRejectName(DenseReject reason) {
+  switch (reason) {
+    case DenseReject::kAccepted:
+      return "accepted";
+    case DenseReject::kNoTexture:
+      return "no_texture";
+    case DenseReject::kNoApproximation:
+      return "no_approximation";
+    case DenseReject::kMpgcOutside:
+      return "outside_image";
+    case DenseReject::kMpgcFlat:
+      return "flat_patch";
+    case DenseReject::kMpgcBehind:
+      return "behind_camera";
+    case DenseReject::kMpgcTooFewViews:
+      return "too_few_views";
+    case DenseReject::kMpgcNotConverged:
+      return "not_converged";
+    case DenseReject::kMpgcSingular:
+      return "singular";
+    case DenseReject::kImprecise:
+      return "imprecise";
+    case DenseReject::kOffSurface:
+      return "off_surface";
+    case DenseReject::kNumReasons:
+      break;
+  }
+  return "unknown";
+}
+
+namespace {
+
+DenseReject RejectOf(MpgcStatus status) {
+  switch (status) {
+    case MpgcStatus::kConverged:
+      return DenseReject::kAccepted;
+    case MpgcStatus::kOutsideImage:
+      return DenseReject::kMpgcOutside;
+    case MpgcStatus::kFlatPatch:
+      return DenseReject::kMpgcFlat;
+    case MpgcStatus::kBehindCamera:
+      return DenseReject::kMpgcBehind;
+    case MpgcStatus::kTooFewViews:
+      return DenseReject::kMpgcTooFewViews;
+    case MpgcStatus::kNotConverged:
+      return DenseReject::kMpgcNotConverged;
+    case MpgcStatus::kSingular:
+      return DenseReject::kMpgcSingular;
+  }
+  return DenseReject::kMpgcSingular;
+}
+
+const Camera& CameraOf(const Scene& scene, const Image& image) {
+  return scene.cameras.at(image.camera_id);
+}
+
+// The object centre: the component-wise median of the sparse points, or,
+// with too few of them, the point nearest to all optical axes.
+Eigen::Vector3d ObjectCentre(const Scene& scene) {
+  if (scene.points3D.size() >= 10) {
+    std::vector<double> coordinates[3];
+    for (const auto& [id, point] : scene.points3D) {
+      for (int k = 0; k < 3; ++k) coordinates[k].push_back(point.xyz(k));
+    }
+    return Eigen::Vector3d(
+        Median(coordinates[0]), Median(coordinates[1]), Median(coordinates[2]));
+  }
+  std::vector<Ray> axes;
+  for (const auto& [id, image] : scene.images) {
+    const Camera& camera = CameraOf(scene, image);
+    const std::optional<Ray> axis = RayThroughPixel(
+        camera,
+        image.cam_from_world,
+        Eigen::Vector2d(camera.width / 2.0, camera.height / 2.0),
+        image.frame ? &*image.frame : nullptr);
+    if (axis) axes.push_back(*axis);
+  }
+  const std::optional<Eigen::Vector3d> centre = IntersectRays(axes, 0.0);
+  if (!centre) {
+    ThrowInputError(
+        "the model has fewer than 10 sparse points and its optical axes do "
+        "not meet in front of the cameras: no object centre for choosing "
+        "master images");
+  }
+  return *centre;
+}
+
+double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI;
+}
+
+}  // namespace
+
+std::vector<MasterSelection> SelectMasters(const Scene& scene,
+                                           const DenseOptions& options) {
+  options.Check();
+  if (scene.images.size() < 2) {
+    ThrowInputError(
+        "dense matching needs two or more oriented images; the "
+        "model has ",
+        scene.images.size());
+  }
+  const Eigen::Vector3d centre = ObjectCentre(scene);
+  std::vector<image_t> ids;
+  std::vector<Eigen::Vector3d> directions;
+  for (const auto& [id, image] : scene.images) {
+    ids.push_back(id);
+    directions.push_back((image.cam_from_world.Center() - centre).normalized());
+  }
+  const int n = static_cast<int>(ids.size());
+  std::vector<int> masters;
+  if (!options.master_names.empty()) {
+    for (const std::string& name : options.master_names) {
+      const Image* image = scene.FindImageByName(name);
+      if (image == nullptr) {
+        ThrowInputError(
+            "--master_names: the model has no image named '", name, "'");
+      }
+      masters.push_back(static_cast<int>(
+          std::find(ids.begin(), ids.end(), image->image_id) - ids.begin()));
+    }
+  } else {
+    // Farthest-point sampling of the viewing directions, from the image
+    // that sees most sparse points.
+    int first = 0;
+    for (int i = 1; i < n; ++i) {
+      if (scene.images.at(ids[i]).NumPoints3D() >
+          scene.images.at(ids[first]).NumPoints3D()) {
+        first = i;
+      }
+    }
+    masters.push_back(first);
+    std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
+    while (static_cast<int>(masters.size()) <
+           std::min(options.num_masters, n)) {
+      int farthest = -1;
+      for (int i = 0; i < n; ++i) {
+        nearest[i] = std::min(
+            nearest[i], AngleDeg(directions[i], directions[masters.back()]));
+        if (nearest[i] > 0 &&
+            (farthest < 0 || nearest[i] > nearest[farthest])) {
+          farthest = i;
+        }
+      }
+      if (farthest < 0) break;
+      masters.push_back(farthest);
+    }
+  }
+  std::vector<MasterSelection> selections;
+  for (int m : masters) {
+    MasterSelection selection;
+    selection.master = ids[m];
+    std::vector<std::pair<double, int>> by_angle;
+    for (int i = 0; i < n; ++i) {
+      if (i == m) continue;
+      const double angle = AngleDeg(directions[i], directions[m]);
+      if (angle <= options.max_search_angle_deg) by_angle.push_back({angle, i});
+    }
+    std::sort(by_angle.begin(), by_angle.end());
+    for (size_t k = 0;
+         k < by_angle.size() && static_cast<int>(k) < options.num_search_images;
+         ++k) {
+      selection.search.push_back(ids[by_angle[k].second]);
+    }
+    if (selection.search.empty()) {
+      ThrowInputError("master image ",
+                      scene.images.at(ids[m]).name,
+                      " has no other image within --max_search_angle_deg ",
+                      options.max_search_angle_deg,
+                      " of its viewing direction");
+    }
+    selections.push_back(std::move(selection));
+  }
+  return selections;
+}
+
+std::map<image_t, DenseImage> LoadDenseImages(
+    const Scene& scene,
+    const std::vector<MasterSelection>& masters,
+    const std::string& image_path,
+    double highpass_sigma_px) {
+  std::map<image_t, DenseImage> images;
+  const auto load = [&](image_t id, bool color) {
+    DenseImage& image = images[id];
+    const Image& record = scene.images.at(id);
+    const std::string path = image_path + "/" + record.name;
+    if (image.gray.empty()) {
+      image.gray = ReadImageGrayFloat(path);
+      const Camera& camera = CameraOf(scene, record);
+      if (image.gray.cols != static_cast<int>(camera.width) ||
+          image.gray.rows != static_cast<int>(camera.height)) {
+        ThrowInputError(path,
+                        ": ",
+                        image.gray.cols,
+                        " x ",
+                        image.gray.rows,
+                        " pixels, but its camera in the model is ",
+                        camera.width,
+                        " x ",
+                        camera.height);
+      }
+    }
+    if (highpass_sigma_px > 0) {
+      // Shading and exposure change slowly across the image; texture does
+      // not. What the photographs' different light leaves of a patch is
+      // then mostly its texture, which least-squares matching's linear
+      // radiometric terms can follow (the paper's high-pass pre-processing
+      // for texture, sec. 3.5, applied here to the matching).
+      cv::Mat blurred;
+      cv::GaussianBlur(image.gray, blurred, cv::Size(), highpass_sigma_px);
+      image.gray = image.gray - blurred + 128.0f;
+    }
+    if (color && image.color.empty()) {
+      image.color = ReadImage(path, ImageReadMode::kColor);
+      if (image.color.depth() == CV_16U) {
+        image.color.convertTo(image.color, CV_8U, 1.0 / 257);
+      }
+    }
+  };
+  for (const MasterSelection& selection : masters) {
+    load(selection.master, true);
+    for (image_t id : selection.search) load(id, false);
+  }
+  return images;
+}
+
+namespace {
+
+// One cell of a master's dense pattern and what became of it.
+struct Cell {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  DenseReject reason = DenseReject::kNoTexture;
+  double depth = std::numeric_limits<double>::quiet_NaN();
+  double sigma_gsd = 0;
+  MpgcResult mpgc;
+};
+
+// What the sparse model says about a master's depths: its whole range
+// (from the sparse points it sees, or that project into it, widened by the
+// margin; the options' range where there are too few), and the points
+// themselves, bucketed by their master pixel, to bound the search of the
+// coarse cells near them.
+class SparseDepths {
+ public:
+  SparseDepths(const Scene& scene,
+               const Image& master,
+               const DenseOptions& options) {
+    const Camera& camera = CameraOf(scene, master);
+    std::vector<Eigen::Vector2d> seen_xy, inside_xy;
+    std::vector<double> seen, inside;
+    for (const auto& [id, point] : scene.points3D) {
+      const double depth = (master.cam_from_world * point.xyz).z();
+      Eigen::Vector2d pixel;
+      if (depth <= 0 || !scene.Project(master, point.xyz, &pixel) ||
+          pixel.x() < 0 || pixel.y() < 0 || pixel.x() > camera.width ||
+          pixel.y() > camera.height) {
+        continue;
+      }
+      inside.push_back(depth);
+      inside_xy.push_back(pixel);
+      for (const TrackElement& element : point.track) {
+        if (element.image_id != master.image_id) continue;
+        seen.push_back(depth);
+        seen_xy.push_back(pixel);
+        break;
+      }
+    }
+    const bool use_seen = seen.size() >= 10;
+    depths_ = use_seen ? seen : inside;
+    xy_ = use_seen ? seen_xy : inside_xy;
+    if (options.max_depth > 0) {
+      min_depth_ = options.min_depth;
+      max_depth_ = options.max_depth;
+    } else if (depths_.size() < 10) {
+      ThrowInputError("master image ",
+                      master.name,
+                      ": fewer than 10 sparse points of the model lie in it, "
+                      "so its depth range is unknown (give --min_depth and "
+                      "--max_depth)");
+    } else {
+      const double low = Quantile(depths_, 0.02);
+      const double high = Quantile(depths_, 0.98);
+      // A scene as deep as a tenth of its distance at least: sparse points
+      // on one plane facing the master all have the same depth.
+      const double margin =
+          options.depth_margin * std::max(high - low, 0.1 * high);
+      min_depth_ = std::max(low - margin, 0.5 * low);
+      max_depth_ = high + margin;
+    }
+    radius_ = options.sparse_radius_px;
+    tolerance_ = options.sparse_tolerance;
+    cols_ = static_cast<int>(camera.width / radius_) + 1;
+    rows_ = static_cast<int>(camera.height / radius_) + 1;
+    buckets_.resize(static_cast<size_t>(cols_) * rows_);
+    for (size_t k = 0; k < xy_.size(); ++k) {
+      if (depths_[k] < min_depth_ || depths_[k] > max_depth_) continue;
+      buckets_[Bucket(xy_[k])].push_back(static_cast<int>(k));
+    }
+  }
+
+  double min_depth() const { return min_depth_; }
+  double max_depth() const { return max_depth_; }
+
+  // The depths of the sparse points within the radius of `xy`, widened by
+  // the tolerance (a share of the depth) and clipped to the master's range;
+  // the whole range where fewer than three points are near.
+  std::pair<double, double> Near(const Eigen::Vector2d& xy) const {
+    double low = std::numeric_limits<double>::infinity(), high = 0;
+    int count = 0;
+    const int bx = static_cast<int>(xy.x() / radius_);
+    const int by = static_cast<int>(xy.y() / radius_);
+    for (int y = std::max(0, by - 1); y <= std::min(rows_ - 1, by + 1); ++y) {
+      for (int x = std::max(0, bx - 1); x <= std::min(cols_ - 1, bx + 1); ++x) {
+        for (int k : buckets_[static_cast<size_t>(y) * cols_ + x]) {
+          if ((xy_[k] - xy).norm() > radius_) continue;
+          low = std::min(low, depths_[k]);
+          high = std::max(high, depths_[k]);
+          ++count;
+        }
+      }
+    }
+    if (count < 3) return {min_depth_, max_depth_};
+    return {std::max(min_depth_, low / (1 + tolerance_)),
+            std::min(max_depth_, high * (1 + tolerance_))};
+  }
+
+ private:
+  size_t Bucket(const Eigen::Vector2d& xy) const {
+    const int x = std::clamp(static_cast<int>(xy.x() / radius_), 0, cols_ - 1);
+    const int y = std::clamp(static_cast<int>(xy.y() / radius_), 0, rows_ - 1);
+    return static_cast<size_t>(y) * cols_ + x;
+  }
+
+  std::vector<Eigen::Vector2d> xy_;
+  std::vector<double> depths_;
+  double min_depth_ = 0, max_depth_ = 0;
+  double radius_ = 1, tolerance_ = 0;
+  int cols_ = 1, rows_ = 1;
+  std::vector<std::vector<int>> buckets_;
+};
+
+// The master's dense pattern: per cell the strongest Moravec point.
+std::vector<Cell> DensePattern(const cv::Mat& gray,
+                               const DenseOptions& options,
+                               int border,
+                               int* cols,
+                               int* rows) {
+  const cv::Mat interest = MoravecInterest(gray, options.moravec_window);
+  const int size = options.cell_size;
+  *cols = std::max(0, (gray.cols - 2 * border) / size);
+  *rows = std::max(0, (gray.rows - 2 * border) / size);
+  std::vector<Cell> cells(static_cast<size_t>(*cols) * *rows);
+  for (int cy = 0; cy < *rows; ++cy) {
+    for (int cx = 0; cx < *cols; ++cx) {
+      Cell& cell = cells[static_cast<size_t>(cy) * *cols + cx];
+      float best = -1;
+      for (int y = border + cy * size; y < border + (cy + 1) * size; ++y) {
+        const float* row = interest.ptr<float>(y);
+        for (int x = border + cx * size; x < border + (cx + 1) * size; ++x) {
+          if (row[x] > best) {
+            best = row[x];
+            cell.xy = Eigen::Vector2d(x + 0.5, y + 0.5);
+          }
+        }
+      }
+      cell.reason = best >= options.min_interest ? DenseReject::kAccepted
+                                                 : DenseReject::kNoTexture;
+    }
+  }
+  return cells;
+}
+
+// Approximation and MPGC for one cell, between two depths along its ray.
+void MatchCell(const MpgcView& master,
+               const std::vector<MpgcView>& search,
+               double min_depth,
+               double max_depth,
+               const DenseOptions& options,
+               Cell* cell) {
+  const std::optional<Ray> ray = RayThroughPixel(
+      *master.camera, master.cam_from_world, cell->xy, master.frame);
+  if (!ray) {
+    cell->reason = DenseReject::kMpgcOutside;
+    return;
+  }
+  // Depths to distances along the ray.
+  const double cosine = (master.cam_from_world.rotation * ray->direction).z();
+  if (cosine <= 0) {
+    cell->reason = DenseReject::kMpgcBehind;
+    return;
+  }
+  const EpipolarSearchResult found = SearchMasterRay(master,
+                                                     cell->xy,
+                                                     search,
+                                                     min_depth / cosine,
+                                                     max_depth / cosine,
+                                                     options.search);
+  if (!found.found) {
+    cell->reason = DenseReject::kNoApproximation;
+    return;
+  }
+  cell->mpgc = MatchMpgc(master, cell->xy, search, found.xyz, options.mpgc);
+  cell->reason = RejectOf(cell->mpgc.status);
+  if (!cell->mpgc.ok()) return;
+  const double depth = (master.cam_from_world * cell->mpgc.xyz).z();
+  const double gsd = depth / master.camera->MeanFocalLengthPx();
+  const double along = std::sqrt(std::max(
+      0.0, ray->direction.dot(cell->mpgc.covariance * ray->direction)));
+  cell->sigma_gsd = along / gsd;
+  if (cell->sigma_gsd > options.max_sigma_gsd) {
+    cell->reason = DenseReject::kImprecise;
+    return;
+  }
+  cell->depth = depth;
+}
+
+// Whether an accepted cell's depth disagrees with the surface of its
+// accepted neighbours (within `radius` cells): inverse depth, linear in the
+// master's pixel coordinates over a plane, fitted to the neighbours, once
+// more without those off by more than three robust sigmas; the cell is off
+// when it misses the fit by more than max(3 sigma along its ray,
+// off_surface_gsd ground sampling distances). Cells with fewer than five
+// neighbours are not judged.
+bool OffSurface(const std::vector<Cell>& cells,
+                int cols,
+                int rows,
+                int index,
+                int radius,
+                double off_surface_gsd,
+                double gsd_per_depth) {
+  const int cx = index % cols, cy = index / cols;
+  const Cell& own = cells[index];
+  std::vector<Eigen::Vector3d> rows_uvw;  // (du, dv, 1/depth)
+  for (int y = std::max(0, cy - radius); y <= std::min(rows - 1, cy + radius);
+       ++y) {
+    for (int x = std::max(0, cx - radius); x <= std::min(cols - 1, cx + radius);
+         ++x) {
+      const Cell& cell = cells[static_cast<size_t>(y) * cols + x];
+      if (&cell == &own || cell.reason != DenseReject::kAccepted) continue;
+      rows_uvw.emplace_back(
+          cell.xy.x() - own.xy.x(), cell.xy.y() - own.xy.y(), 1 / cell.depth);
+    }
+  }
+  if (rows_uvw.size() < 5) return false;
+  std::vector<bool> use(rows_uvw.size(), true);
+  double predicted = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    for (size_t k = 0; k < rows_uvw.size(); ++k) {
+      if (!use[k]) continue;
+      const Eigen::Vector3d a(1, rows_uvw[k].x(), rows_uvw[k].y());
+      N += a * a.transpose();
+      b += a * rows_uvw[k].z();
+    }
+    const Eigen::Vector3d plane = N.ldlt().solve(b);
+    if (!plane.allFinite()) return false;
+    predicted = plane(0);
+    if (pass == 1) break;
+    std::vector<double> residuals;
+    for (const Eigen::Vector3d& r : rows_uvw) {
+      residuals.push_back(
+          std::abs(plane(0) + plane(1) * r.x() + plane(2) * r.y() - r.z()));
+    }
+    const double limit = 3 * 1.4826 * Median(residuals);
+    int kept = 0;
+    for (size_t k = 0; k < rows_uvw.size(); ++k) {
+      use[k] = residuals[k] <= limit;
+      kept += use[k];
+    }
+    if (kept < 5) return false;
+  }
+  if (!(predicted > 0)) return false;
+  const double miss = std::abs(1 / predicted - own.depth);
+  const double gsd = own.depth * gsd_per_depth;
+  return miss > std::max(3 * own.sigma_gsd * gsd, off_surface_gsd * gsd);
+}
+
+// The unit normal of the plane through the accepted points of the cells
+// around `index`, facing the master's projection centre.
+Eigen::Vector3f CellNormal(const std::vector<Cell>& cells,
+                           int cols,
+                           int rows,
+                           int index,
+                           const Eigen::Vector3d& centre) {
+  const int cx = index % cols, cy = index / cols;
+  const Eigen::Vector3d& own = cells[index].mpgc.xyz;
+  Eigen::Vector3d towards = (centre - own).normalized();
+  for (int radius = 1; radius <= 2; ++radius) {
+    std::vector<Eigen::Vector3d> points;
+    for (int y = std::max(0, cy - radius); y <= std::min(rows - 1, cy + radius);
+         ++y) {
+      for (int x = std::max(0, cx - radius);
+           x <= std::min(cols - 1, cx + radius);
+           ++x) {
+        const Cell& cell = cells[static_cast<size_t>(y) * cols + x];
+        if (cell.reason == DenseReject::kAccepted) {
+          points.push_back(cell.mpgc.xyz);
+        }
+      }
+    }
+    if (points.size() < 4) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& p : points) mean += p;
+    mean /= points.size();
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (const Eigen::Vector3d& p : points) {
+      scatter += (p - mean) * (p - mean).transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+    Eigen::Vector3d normal = eigen.eigenvectors().col(0);
+    if (normal.dot(towards) < 0) normal = -normal;
+    return normal.cast<float>();
+  }
+  return towards.cast<float>();
+}
+
+Eigen::Matrix<uint8_t, 3, 1> ColorAt(const cv::Mat& bgr,
+                                     const Eigen::Vector2d& xy) {
+  const int x = std::clamp(static_cast<int>(xy.x()), 0, bgr.cols - 1);
+  const int y = std::clamp(static_cast<int>(xy.y()), 0, bgr.rows - 1);
+  const cv::Vec3b& pixel = bgr.at<cv::Vec3b>(y, x);
+  return Eigen::Matrix<uint8_t, 3, 1>(pixel[2], pixel[1], pixel[0]);
+}
+
+}  // namespace
+
+PointCloud DenseReconstruct(const Scene& scene,
+                            const std::map<image_t, DenseImage>& images,
+                            const std::vector<MasterSelection>& masters,
+                            const DenseOptions& options,
+                            DenseReport* report,
+                            std::vector<std::vector<image_t>>* visibility) {
+  options.Check();
+  const Timer total_timer;
+  DenseReport local_report;
+  if (report == nullptr) report = &local_report;
+  *report = DenseReport();
+  const auto view_of = [&](image_t id) {
+    const Image& image = scene.images.at(id);
+    MpgcView view;
+    view.image = &images.at(id).gray;
+    view.camera = &CameraOf(scene, image);
+    view.cam_from_world = image.cam_from_world;
+    view.frame = image.frame ? &*image.frame : nullptr;
+    return view;
+  };
+  const int border = options.mpgc.lsm.patch_radius + 2;
+
+  // The patterns first, for one progress display over all masters.
+  struct MasterWork {
+    std::vector<Cell> cells;
+    int cols = 0, rows = 0;
+  };
+  std::vector<MasterWork> work(masters.size());
+  size_t total_cells = 0;
+  for (size_t m = 0; m < masters.size(); ++m) {
+    work[m].cells = DensePattern(images.at(masters[m].master).gray,
+                                 options,
+                                 border,
+                                 &work[m].cols,
+                                 &work[m].rows);
+    total_cells += work[m].cells.size();
+  }
+  Progress progress("dense", total_cells, "points");
+
+  PointCloud cloud;
+  std::vector<double> sx, sy, sz, num_images, master_ids, sigma0, correlation;
+  for (size_t m = 0; m < masters.size(); ++m) {
+    const Timer timer;
+    const MasterSelection& selection = masters[m];
+    const Image& master_image = scene.images.at(selection.master);
+    const MpgcView master = view_of(selection.master);
+    std::vector<MpgcView> search;
+    for (image_t id : selection.search) search.push_back(view_of(id));
+    const SparseDepths sparse(scene, master_image, options);
+    const double min_depth = sparse.min_depth(), max_depth = sparse.max_depth();
+
+    std::vector<Cell>& cells = work[m].cells;
+    const int cols = work[m].cols, rows = work[m].rows;
+    const int step = options.coarse_step;
+    const auto is_coarse = [&](int index) {
+      return (index % cols) % step == 0 && (index / cols) % step == 0;
+    };
+    std::vector<int> coarse, fine;
+    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
+      if (cells[i].reason != DenseReject::kAccepted) {
+        progress.Add();
+        continue;
+      }
+      (is_coarse(i) ? coarse : fine).push_back(i);
+    }
+    // Coarse cells within the depths of the sparse points near them.
+    ParallelFor(
+        static_cast<int>(coarse.size()), options.num_threads, [&](int k) {
+          Cell& cell = cells[coarse[k]];
+          const auto [low, high] = sparse.Near(cell.xy);
+          MatchCell(master, search, low, high, options, &cell);
+          progress.Add();
+        });
+    // Every other cell inside the band of the coarse points around it.
+    const int reach = options.band_radius_cells * step;
+    ParallelFor(static_cast<int>(fine.size()), options.num_threads, [&](int k) {
+      Cell& cell = cells[fine[k]];
+      const int cx = fine[k] % cols, cy = fine[k] / cols;
+      double low = std::numeric_limits<double>::infinity(), high = 0;
+      for (int y = (std::max(0, cy - reach) + step - 1) / step * step;
+           y <= std::min(rows - 1, cy + reach);
+           y += step) {
+        for (int x = (std::max(0, cx - reach) + step - 1) / step * step;
+             x <= std::min(cols - 1, cx + reach);
+             x += step) {
+          const double depth = cells[static_cast<size_t>(y) * cols + x].depth;
+          if (std::isfinite(depth)) {
+            low = std::min(low, depth);
+            high = std::max(high, depth);
+          }
+        }
+      }
+      if (high > 0) {
+        MatchCell(master,
+                  search,
+                  low / (1 + options.band_tolerance),
+                  high * (1 + options.band_tolerance),
+                  options,
+                  &cell);
+      } else {
+        cell.reason = DenseReject::kNoApproximation;
+      }
+      progress.Add();
+    });
+
+    // Blunders that MPGC's own tests let through: off the surface of their
+    // neighbours (judged all at once, so that one blunder does not change
+    // the verdict on another).
+    std::vector<int> off;
+    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
+      if (cells[i].reason == DenseReject::kAccepted &&
+          OffSurface(cells,
+                     cols,
+                     rows,
+                     i,
+                     options.surface_radius_cells,
+                     options.off_surface_gsd,
+                     1 / master.camera->MeanFocalLengthPx())) {
+        off.push_back(i);
+      }
+    }
+    for (int i : off) cells[i].reason = DenseReject::kOffSurface;
+
+    DenseMasterReport master_report;
+    master_report.master = selection.master;
+    master_report.name = master_image.name;
+    master_report.search = selection.search;
+    master_report.min_depth = min_depth;
+    master_report.max_depth = max_depth;
+    master_report.num_cells = cells.size();
+    const cv::Mat& color = images.at(selection.master).color;
+    const Eigen::Vector3d centre = master_image.cam_from_world.Center();
+    std::vector<double> sigmas;
+    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
+      const Cell& cell = cells[i];
+      ++master_report.rejects[static_cast<int>(cell.reason)];
+      if (cell.reason != DenseReject::kAccepted) continue;
+      const MpgcResult& result = cell.mpgc;
+      cloud.positions.push_back(result.xyz);
+      cloud.normals.push_back(CellNormal(cells, cols, rows, i, centre));
+      cloud.colors.push_back(color.empty()
+                                 ? Eigen::Matrix<uint8_t, 3, 1>(128, 128, 128)
+                                 : ColorAt(color, cell.xy));
+      const Eigen::Vector3d sigma = result.StdDev();
+      sx.push_back(sigma.x());
+      sy.push_back(sigma.y());
+      sz.push_back(sigma.z());
+      num_images.push_back(1 + result.views.size());
+      master_ids.push_back(selection.master);
+      sigma0.push_back(result.sigma0);
+      correlation.push_back(std::accumulate(result.correlation.begin(),
+                                            result.correlation.end(),
+                                            0.0) /
+                            std::max<size_t>(1, result.correlation.size()));
+      sigmas.push_back(cell.sigma_gsd);
+      if (visibility != nullptr) {
+        std::vector<image_t> seen = {selection.master};
+        for (int view : result.views) seen.push_back(selection.search[view]);
+        visibility->push_back(std::move(seen));
+      }
+    }
+    master_report.num_points =
+        master_report.rejects[static_cast<int>(DenseReject::kAccepted)];
+    master_report.median_sigma_gsd = Median(sigmas);
+    master_report.seconds = timer.Seconds();
+    report->num_points += master_report.num_points;
+    report->num_cells += master_report.num_cells;
+    report->masters.push_back(std::move(master_report));
+    work[m].cells = std::vector<Cell>();  // bounded memory: one master's cells
+  }
+  progress.Finish();
+  cloud.AddAttribute("sx", PlyScalarType::kFloat).values = std::move(sx);
+  cloud.AddAttribute("sy", PlyScalarType::kFloat).values = std::move(sy);
+  cloud.AddAttribute("sz", PlyScalarType::kFloat).values = std::move(sz);
+  cloud.AddAttribute("num_images", PlyScalarType::kUChar).values =
+      std::move(num_images);
+  cloud.AddAttribute("master_id", PlyScalarType::kInt).values =
+      std::move(master_ids);
+  cloud.AddAttribute("sigma0", PlyScalarType::kFloat).values =
+      std::move(sigma0);
+  cloud.AddAttribute("correlation", PlyScalarType::kFloat).values =
+      std::move(correlation);
+  report->seconds = total_timer.Seconds();
+  return cloud;
+}
+
+std::string DenseReport::Summary() const {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  std::array<size_t, static_cast<int>(DenseReject::kNumReasons)> rejects{};
+  for (const DenseMasterReport& master : masters) {
+    out.precision(2);
+    out << "  master " << master.name << " (" << master.search.size()
+        << " search images, depth " << master.min_depth << " to "
+        << master.max_depth << "): " << master.num_points << " of "
+        << master.num_cells << " cells, median sigma along the ray ";
+    out.precision(2);
+    out << master.median_sigma_gsd << " GSD, ";
+    out.precision(1);
+    out << master.seconds << " s\n";
+    for (size_t r = 0; r < rejects.size(); ++r) rejects[r] += master.rejects[r];
+  }
+  out << "  rejected:";
+  for (size_t r = 1; r < rejects.size(); ++r) {
+    if (rejects[r] > 0) {
+      out << " " << DenseRejectName(static_cast<DenseReject>(r)) << " "
+          << rejects[r];
+    }
+  }
+  out.precision(0);
+  out << "\n"
+      << num_points << " points from " << masters.size() << " masters, "
+      << num_cells << " cells in ";
+  out.precision(1);
+  out << seconds << " s (";
+  out.precision(0);
+  out << PointsPerSecond() << " cells/s)";
+  return out.str();
+}
+
+}  // namespace bayon

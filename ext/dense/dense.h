@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// `bayon dense`: the paper's section 3.3, a dense surface by multi-photo
+// geometrically constrained matching (mpgc.h) from a few master images.
+//
+// 1. Masters and their search images by viewing geometry: every image's
+//    direction from the object centre (the median of the sparse points) to
+//    its projection centre; masters by farthest-point sampling of those
+//    directions (a ring of 16 with 5 masters: every third or fourth image),
+//    and for each master the images nearest in direction (default 6, the
+//    paper's 7 in total) that are within max_search_angle_deg.
+// 2. The dense pattern: the master divided into cells (7 x 7 pixels) and the
+//    strongest Moravec point of each cell kept where it has texture.
+// 3. Approximations by correlation along the master ray (SearchMasterRay):
+//    first for a coarse subset of the cells (every coarse_step-th in each
+//    direction) within the depths of the sparse points near each (or the
+//    master's whole depth range where there are none), then
+//    for every other cell inside the band the coarse points around it
+//    span, widened by band_tolerance: the disparity-surface band of the
+//    paper, built from the master's own coarse points in the adjusted
+//    object system.
+// 4. MPGC for every point, with blunder/occlusion removal per search image
+//    (mpgc.h), and a precision test: points whose standard deviation along
+//    the master ray (the depth, where the intersection is weakest) exceeds
+//    max_sigma_gsd ground sampling distances of the master are rejected.
+//    Then every point is tested against the plane of its neighbours in the
+//    master's cell grid (inverse depth over the pixel coordinates, fitted
+//    robustly); those off it are rejected as blunders.
+// 5. Normals from the accepted neighbours in the master's cell grid (a
+//    plane through them, facing the master), colours from the master.
+//
+// Everything is in the model's object system, so the masters' points form
+// one cloud without any registration between them.
+#pragma once
+
+#include "ext/core/point_cloud.h"
+#include "ext/core/scene.h"
+#include "ext/dense/mpgc.h"
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace bayon {
+
+struct DenseOptions {
+  // Radiometric pre-processing of the grey values for matching: minus their
+  // Gaussian blur of this sigma (pixels; 0: off), so that photographs taken
+  // in different light agree (LoadDenseImages).
+  double highpass_sigma_px = 3.0;
+  int num_masters = 5;
+  // Explicit masters (image names); overrides num_masters.
+  std::vector<std::string> master_names;
+  int num_search_images = 6;
+  double max_search_angle_deg = 75;
+  // Dense pattern: cell side, pixels; a cell's best Moravec point must
+  // reach min_interest (squared grey values, moravec.h).
+  int cell_size = 7;
+  int moravec_window = 5;
+  double min_interest = 4.0;
+  // Approximations: the coarse cells, and how far the band of the other
+  // cells reaches beyond the depths of the coarse points around them
+  // (a share of the depth), over how many coarse cells around.
+  int coarse_step = 4;
+  double band_tolerance = 0.01;
+  int band_radius_cells = 2;
+  // The master's depth range when the model has fewer than 10 sparse points
+  // in it (object units; 0: refuse).
+  double min_depth = 0;
+  double max_depth = 0;
+  // Widening of the depth range of the sparse points (a share of it).
+  double depth_margin = 0.25;
+  // A coarse cell searches between the depths of the sparse points within
+  // sparse_radius_px of it, widened by sparse_tolerance (a share of the
+  // depth); with fewer than three such points, the master's whole range.
+  double sparse_radius_px = 60;
+  double sparse_tolerance = 0.05;
+  EpipolarSearchOptions search;
+  MpgcOptions mpgc;
+  double max_sigma_gsd = 2.0;
+  // Off-surface test: a point whose depth misses the plane of its
+  // neighbours within surface_radius_cells by more than
+  // max(3 sigma, off_surface_gsd GSDs) is a blunder.
+  int surface_radius_cells = 2;
+  double off_surface_gsd = 3.0;
+  int num_threads = -1;
+  DenseOptions();      // the dense stage's own defaults for search and mpgc
+  void Check() const;  // throws InputError naming field, value, rule
+};
+
+struct MasterSelection {
+  image_t master = kInvalidImageId;
+  std::vector<image_t> search;  // nearest in viewing direction first
+};
+
+// Throws InputError when the scene has fewer than two images, a named master
+// is not in it, or a master has no search image within the angle.
+std::vector<MasterSelection> SelectMasters(const Scene& scene,
+                                           const DenseOptions& options);
+
+// Why a cell of a master gave no point.
+enum class DenseReject {
+  kAccepted = 0,
+  kNoTexture,        // no Moravec point reaches min_interest in the cell
+  kNoApproximation,  // correlation along the ray stayed below min_ncc, or
+                     // no coarse point around to bound the search
+  kMpgcOutside,      // the MPGC statuses (mpgc.h)
+  kMpgcFlat,
+  kMpgcBehind,
+  kMpgcTooFewViews,
+  kMpgcNotConverged,
+  kMpgcSingular,
+  kImprecise,   // sigma along the ray above max_sigma_gsd
+  kOffSurface,  // off the plane of its neighbours
+  kNumReasons
+};
+const char* DenseRejectName(DenseReject reason);
+
+struct DenseMasterReport {
+  image_t master = kInvalidImageId;
+  std::string name;
+  std::vector<image_t> search;
+  double min_depth = 0, max_depth = 0;
+  size_t num_cells = 0;
+  size_t num_points = 0;
+  std::array<size_t, static_cast<int>(DenseReject::kNumReasons)> rejects{};
+  double median_sigma_gsd = 0;  // along the ray, master GSDs
+  double seconds = 0;
+};
+
+struct DenseReport {
+  std::vector<DenseMasterReport> masters;
+  size_t num_points = 0;
+  size_t num_cells = 0;
+  double seconds = 0;
+  double PointsPerSecond() const {
+    return seconds > 0 ? num_cells / seconds : 0;
+  }
+  std::string Summary() const;
+};
+
+// The images of the scene, loaded once: grey (CV_32F, 0..255) for matching,
+// and colour (8-bit BGR) for the points' colours.
+struct DenseImage {
+  cv::Mat gray;
+  cv::Mat color;
+};
+
+// A cloud with per-point attributes sx sy sz (object units), num_images,
+// master_id, sigma0 (grey values) and correlation (mean over the search
+// patches), with normals and colours; `visibility` (if not null) gets, per
+// point, the image ids it was matched in (the master first).
+PointCloud DenseReconstruct(const Scene& scene,
+                            const std::map<image_t, DenseImage>& images,
+                            const std::vector<MasterSelection>& masters,
+                            const DenseOptions& options,
+                            DenseReport* report,
+                            std::vector<std::vector<image_t>>* visibility);
+
+// Loads the images `masters` need from `image_path` (by the scene's names),
+// the grey values high-pass filtered (minus their Gaussian blur of
+// `highpass_sigma_px`, plus 128; 0: as read).
+std::map<image_t, DenseImage> LoadDenseImages(
+    const Scene& scene,
+    const std::vector<MasterSelection>& masters,
+    const std::string& image_path,
+    double highpass_sigma_px);
+
+}  // namespace bayon

@@ -1,0 +1,173 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/dense/dense.h"
+
+#include "ext/core/errors.h"
+#include "ext/dense/plane_scene_testing.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace bayon {
+namespace {
+
+using testing::PlaneScene;
+
+// 16 stations evenly on a ring of radius 10 around the origin, all looking
+// at it, and a few sparse points there: the paper's image network.
+Scene Ring(int num_views) {
+  Scene scene;
+  Camera camera = SyntheticCamera(SyntheticCameraOptions());
+  camera.camera_id = 1;
+  scene.cameras.Set(1, camera);
+  for (int i = 0; i < num_views; ++i) {
+    const double azimuth = 2 * M_PI * i / num_views;
+    Image image;
+    image.image_id = static_cast<image_t>(i + 1);
+    image.name = "image_" + std::to_string(i + 1) + ".png";
+    image.camera_id = 1;
+    image.cam_from_world = LookAt(
+        Eigen::Vector3d(10 * std::cos(azimuth), 10 * std::sin(azimuth), 1.5),
+        Eigen::Vector3d(0, 0, 1.5),
+        Eigen::Vector3d::UnitZ());
+    scene.images.Set(image.image_id, image);
+  }
+  for (int k = 0; k < 12; ++k) {
+    scene.AddPoint3D(Eigen::Vector3d(0.1 * (k % 3), 0.1 * (k / 3), 1.5), {});
+  }
+  return scene;
+}
+
+// Steps between two stations of the ring, either way round.
+int RingSteps(image_t a, image_t b, int num_views) {
+  const int d = std::abs(static_cast<int>(a) - static_cast<int>(b));
+  return std::min(d, num_views - d);
+}
+
+TEST(Dense, MastersSpreadAroundTheRingWithTheirNeighbours) {
+  const Scene scene = Ring(16);
+  const std::vector<MasterSelection> masters =
+      SelectMasters(scene, DenseOptions());
+  ASSERT_EQ(masters.size(), 5u);
+  std::set<image_t> ids;
+  for (const MasterSelection& selection : masters) {
+    ids.insert(selection.master);
+    // The six nearest stations, three on each side.
+    ASSERT_EQ(selection.search.size(), 6u);
+    std::vector<int> steps;
+    for (image_t id : selection.search) {
+      steps.push_back(RingSteps(id, selection.master, 16));
+    }
+    std::sort(steps.begin(), steps.end());
+    EXPECT_EQ(steps, (std::vector<int>{1, 1, 2, 2, 3, 3}));
+  }
+  EXPECT_EQ(ids.size(), 5u);
+  // Every station lies within two steps of a master (the masters with their
+  // neighbours cover the ring), and no two masters are adjacent.
+  for (image_t id = 1; id <= 16; ++id) {
+    int nearest = 16;
+    for (image_t master : ids) {
+      nearest = std::min(nearest, RingSteps(id, master, 16));
+    }
+    EXPECT_LE(nearest, 2) << "image " << id;
+  }
+  for (image_t a : ids) {
+    for (image_t b : ids) {
+      if (a != b) {
+        EXPECT_GE(RingSteps(a, b, 16), 2);
+      }
+    }
+  }
+}
+
+TEST(Dense, MastersByNameAndRefusals) {
+  const Scene scene = Ring(16);
+  DenseOptions options;
+  options.master_names = {"image_4.png", "image_12.png"};
+  const std::vector<MasterSelection> named = SelectMasters(scene, options);
+  ASSERT_EQ(named.size(), 2u);
+  EXPECT_EQ(named[0].master, 4u);
+  EXPECT_EQ(named[1].master, 12u);
+
+  options.master_names = {"image_99.png"};
+  EXPECT_THROW(SelectMasters(scene, options), InputError);
+  // 22.5 degrees between stations: none within 10.
+  options.master_names.clear();
+  options.max_search_angle_deg = 10;
+  EXPECT_THROW(SelectMasters(scene, options), InputError);
+  options = DenseOptions();
+  options.cell_size = 0;
+  EXPECT_THROW(SelectMasters(scene, options), InputError);
+}
+
+TEST(Dense, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
+  const PlaneScene plane(2.0);
+  const Scene scene = plane.ToScene();
+  std::map<image_t, DenseImage> images;
+  for (size_t j = 0; j < plane.images.size(); ++j) {
+    images[static_cast<image_t>(j + 1)].gray = plane.images[j];
+  }
+  DenseOptions options;
+  options.num_threads = 2;
+  // The orientation is exact: the collinearity conditions as good as hard.
+  options.mpgc.geometric_sigma_px = 0.01;
+  const std::vector<MasterSelection> masters = {{1, {2, 3, 4, 5}}};
+  DenseReport report;
+  std::vector<std::vector<image_t>> visibility;
+  const PointCloud cloud =
+      DenseReconstruct(scene, images, masters, options, &report, &visibility);
+
+  ASSERT_EQ(report.masters.size(), 1u);
+  const DenseMasterReport& master = report.masters[0];
+  size_t counted = 0;
+  for (size_t count : master.rejects) counted += count;
+  EXPECT_EQ(counted, master.num_cells);
+  const size_t textured =
+      master.num_cells -
+      master.rejects[static_cast<int>(DenseReject::kNoTexture)];
+  std::printf("plane: %zu points of %zu cells, %zu textured\n",
+              cloud.size(),
+              master.num_cells,
+              textured);
+  EXPECT_GE(cloud.size(), 0.8 * textured);
+  ASSERT_EQ(visibility.size(), cloud.size());
+
+  // The plane is z = 0: errors along z against the reported sz.
+  const double gsd = 4.0 / plane.camera.MeanFocalLengthPx();
+  const PointAttribute* sz = cloud.FindAttribute("sz");
+  const PointAttribute* num_images = cloud.FindAttribute("num_images");
+  const PointAttribute* master_id = cloud.FindAttribute("master_id");
+  ASSERT_NE(sz, nullptr);
+  ASSERT_NE(num_images, nullptr);
+  ASSERT_NE(master_id, nullptr);
+  double sum_sq = 0, sum_normalised_sq = 0;
+  int facing = 0;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const double z = cloud.positions[i].z();
+    sum_sq += z * z;
+    sum_normalised_sq += std::pow(z / sz->values[i], 2);
+    facing += cloud.normals[i].z() > std::cos(5 * M_PI / 180);
+    EXPECT_EQ(visibility[i].front(), 1u);
+    EXPECT_EQ(visibility[i].size(), num_images->values[i]);
+    EXPECT_GE(num_images->values[i], 3);
+    EXPECT_EQ(master_id->values[i], 1);
+  }
+  const double rms_gsd = std::sqrt(sum_sq / cloud.size()) / gsd;
+  const double normalised = std::sqrt(sum_normalised_sq / cloud.size());
+  std::printf(
+      "plane: RMS error along z %.3f GSD, RMS error / sz %.2f, "
+      "%d of %zu normals within 5 deg\n",
+      rms_gsd,
+      normalised,
+      facing,
+      cloud.size());
+  EXPECT_LT(rms_gsd, 0.1);
+  EXPECT_GT(normalised, 1 / 1.5);
+  EXPECT_LT(normalised, 1.5);
+  EXPECT_GE(facing, 0.95 * cloud.size());
+}
+
+}  // namespace
+}  // namespace bayon

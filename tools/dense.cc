@@ -1,0 +1,270 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/dense/dense.h"
+
+#include "ext/colmap/bayon_tables.h"
+#include "ext/colmap/calibration_json.h"
+#include "ext/colmap/database.h"
+#include "ext/colmap/model_io.h"
+#include "ext/colmap/ply_io.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+nlohmann::ordered_json ReportToJson(const DenseReport& report,
+                                    const DenseOptions& options) {
+  nlohmann::ordered_json json;
+  json["num_points"] = report.num_points;
+  json["num_cells"] = report.num_cells;
+  json["seconds"] = report.seconds;
+  json["cells_per_second"] = report.PointsPerSecond();
+  json["cell_size"] = options.cell_size;
+  json["masters"] = nlohmann::ordered_json::array();
+  for (const DenseMasterReport& master : report.masters) {
+    nlohmann::ordered_json entry;
+    entry["image_id"] = master.master;
+    entry["name"] = master.name;
+    entry["search_image_ids"] = master.search;
+    entry["min_depth"] = master.min_depth;
+    entry["max_depth"] = master.max_depth;
+    entry["num_cells"] = master.num_cells;
+    entry["num_points"] = master.num_points;
+    entry["median_sigma_gsd"] = master.median_sigma_gsd;
+    entry["seconds"] = master.seconds;
+    nlohmann::ordered_json rejects = nlohmann::ordered_json::object();
+    for (size_t r = 1; r < master.rejects.size(); ++r) {
+      rejects[DenseRejectName(static_cast<DenseReject>(r))] = master.rejects[r];
+    }
+    entry["rejected"] = rejects;
+    json["masters"].push_back(entry);
+  }
+  return json;
+}
+
+// The model with its full calibration (calibration.json beside it) and the
+// scanned frames' interior orientations from the database, if one is given.
+Scene ReadOrientedModel(const std::string& input_path,
+                        const std::string& database_path) {
+  Scene scene = ReadModel(input_path);
+  for (const auto& [camera_id, camera] :
+       ReadCalibrationsBesideModel(input_path)) {
+    if (scene.cameras.contains(camera_id)) scene.cameras.at(camera_id) = camera;
+  }
+  if (!database_path.empty()) {
+    Database database(database_path, Database::Mode::kReadOnly);
+    if (BayonTableExists(&database, kInteriorTable.name)) {
+      const std::map<image_t, InteriorRecord> interiors =
+          ReadAllInteriors(&database);
+      for (auto& [image_id, image] : scene.images) {
+        const auto it = interiors.find(image_id);
+        if (it != interiors.end()) image.frame = it->second.frame;
+      }
+    }
+  }
+  return scene;
+}
+
+}  // namespace
+
+int RunDense(int argc, char** argv) {
+  std::string workspace_path, image_path, input_path, database_path;
+  std::string output_path, fused_path, report_path, log_path, master_names;
+  bool overwrite = false;
+  DenseOptions options;
+  CommandLine command(
+      "dense",
+      "Dense surface points by multi-photo geometrically constrained "
+      "matching (MPGC, the Bayon paper's sec. 3.3) on the CPU: a dense "
+      "Moravec pattern in a few master images, approximations by "
+      "correlation along the master rays, then least-squares matching of "
+      "each master patch against all its search images at once, constrained "
+      "to the collinearity rays, giving X, Y, Z with their standard "
+      "deviations. Writes a PLY (normals, colours, sx sy sz, num_images, "
+      "master_id) and COLMAP's fused.ply + fused.ply.vis beside it.");
+  CLI::App& app = command.app();
+  app.add_option("--workspace_path",
+                 workspace_path,
+                 "Workspace: defaults images/, sparse/adjusted, database.db "
+                 "and dense/points.ply under it");
+  app.add_option("--image_path", image_path, "Folder of the images");
+  app.add_option("--input_path", input_path, "Oriented sparse model");
+  app.add_option("--database_path",
+                 database_path,
+                 "COLMAP database with bayon_interior (scanned frames); "
+                 "optional");
+  app.add_option("--output_path", output_path, "Dense cloud (PLY)");
+  app.add_option("--fused_path",
+                 fused_path,
+                 "COLMAP fused.ply (default: beside --output_path)");
+  app.add_option("--report_path",
+                 report_path,
+                 "Report as JSON (default: --output_path with .json)");
+  app.add_option("--highpass_sigma_px",
+                 options.highpass_sigma_px,
+                 "Matching on grey values minus their Gaussian blur of this "
+                 "sigma, px (0 = off): different light between photographs");
+  app.add_option("--num_masters", options.num_masters, "Master images");
+  app.add_option("--master_names",
+                 master_names,
+                 "Master images by name, comma-separated (overrides "
+                 "--num_masters)");
+  app.add_option("--num_search_images",
+                 options.num_search_images,
+                 "Search images per master (nearest viewing directions)");
+  app.add_option("--max_search_angle_deg",
+                 options.max_search_angle_deg,
+                 "Largest angle between master and search directions");
+  app.add_option("--cell_size",
+                 options.cell_size,
+                 "Dense pattern: one Moravec point per cell of this side, px");
+  app.add_option("--min_interest",
+                 options.min_interest,
+                 "Smallest Moravec interest of a cell's point");
+  app.add_option("--coarse_step",
+                 options.coarse_step,
+                 "Coarse cells (full depth range): every n-th in x and y");
+  app.add_option("--band_tolerance",
+                 options.band_tolerance,
+                 "Band beyond the coarse points' depths, share of the depth");
+  app.add_option("--band_radius_cells",
+                 options.band_radius_cells,
+                 "Coarse cells around a cell that bound its band");
+  app.add_option("--min_depth",
+                 options.min_depth,
+                 "Depth range when the model has too few sparse points");
+  app.add_option("--max_depth", options.max_depth, "(see --min_depth)");
+  app.add_option("--depth_margin",
+                 options.depth_margin,
+                 "Widening of the sparse points' depth range, share");
+  app.add_option("--window_radius",
+                 options.search.window_radius,
+                 "Correlation window along the ray: radius, px");
+  app.add_option("--min_ncc",
+                 options.search.min_ncc,
+                 "Smallest mean correlation of an approximation");
+  app.add_option("--best_views",
+                 options.search.best_views,
+                 "Approximations: score of the best n views (0 = all)");
+  app.add_option(
+      "--patch_radius", options.mpgc.lsm.patch_radius, "MPGC patch radius, px");
+  app.add_option("--min_correlation",
+                 options.mpgc.min_correlation,
+                 "MPGC: search patches correlating less are dropped");
+  app.add_option("--min_search_views",
+                 options.mpgc.min_search_views,
+                 "MPGC: fewest search images a point keeps");
+  app.add_option("--geometric_sigma_px",
+                 options.mpgc.geometric_sigma_px,
+                 "MPGC: a priori sigma of the collinearity conditions, px");
+  app.add_option("--convergence_px",
+                 options.mpgc.convergence_px,
+                 "MPGC: converged when no patch centre moves more, px");
+  app.add_option("--max_iterations",
+                 options.mpgc.max_iterations,
+                 "MPGC: most iterations per solution");
+  app.add_option("--max_shift_px",
+                 options.mpgc.max_shift_px,
+                 "MPGC: largest move of a patch from its approximation");
+  app.add_option("--max_sigma_gsd",
+                 options.max_sigma_gsd,
+                 "Reject points with a larger sigma along the master ray, "
+                 "in ground sampling distances");
+  app.add_option("--num_threads", options.num_threads, "-1 = all cores");
+  app.add_option("--overwrite", overwrite, "Replace existing output files");
+  app.add_option(
+      "--log_path", log_path, "Log file (default <workspace>/logs/dense.log)");
+  if (!command.Parse(argc, argv)) return 0;
+  if (!workspace_path.empty()) {
+    CheckDirectoryExists(workspace_path, "--workspace_path");
+    if (image_path.empty()) image_path = workspace_path + "/images";
+    if (input_path.empty()) input_path = workspace_path + "/sparse/adjusted";
+    if (database_path.empty() && fs::exists(workspace_path + "/database.db")) {
+      database_path = workspace_path + "/database.db";
+    }
+    if (output_path.empty()) output_path = workspace_path + "/dense/points.ply";
+  }
+  if (image_path.empty() || input_path.empty() || output_path.empty()) {
+    ThrowInputError(
+        "give --workspace_path, or --image_path, --input_path and "
+        "--output_path");
+  }
+  if (!master_names.empty()) {
+    std::stringstream names(master_names);
+    for (std::string name; std::getline(names, name, ',');) {
+      if (!name.empty()) options.master_names.push_back(name);
+    }
+  }
+  options.Check();
+  CheckDirectoryExists(image_path, "--image_path");
+  CheckDirectoryExists(input_path, "--input_path");
+  if (!database_path.empty()) CheckFileExists(database_path, "--database_path");
+  const fs::path output_folder = fs::absolute(output_path).parent_path();
+  if (fused_path.empty()) fused_path = (output_folder / "fused.ply").string();
+  if (report_path.empty()) {
+    report_path = fs::path(output_path).replace_extension(".json").string();
+  }
+  for (const std::string& path : {output_path, fused_path, report_path}) {
+    CheckOutputPath(path, overwrite);
+  }
+  CheckOutputPath(fused_path + ".vis", overwrite);
+  if (log_path.empty()) {
+    log_path = WorkspaceLogPath(WorkspaceOfStageFile(output_path), "dense");
+  }
+  command.StartLog(log_path);
+
+  const Scene scene = ReadOrientedModel(input_path, database_path);
+  const std::vector<MasterSelection> masters = SelectMasters(scene, options);
+  for (const MasterSelection& selection : masters) {
+    std::string search;
+    for (image_t id : selection.search) {
+      search += (search.empty() ? "" : ", ") + scene.images.at(id).name;
+    }
+    LOG(INFO) << "master " << scene.images.at(selection.master).name
+              << ", search images " << search;
+  }
+  const std::map<image_t, DenseImage> images =
+      LoadDenseImages(scene, masters, image_path, options.highpass_sigma_px);
+  DenseReport report;
+  std::vector<std::vector<image_t>> seen;
+  const PointCloud cloud =
+      DenseReconstruct(scene, images, masters, options, &report, &seen);
+  if (cloud.empty()) {
+    throw RunFailure(StrCat("no dense point was matched in ",
+                            masters.size(),
+                            " master images:\n",
+                            report.Summary()));
+  }
+  // .vis indices: positions in the model's image list.
+  std::map<image_t, uint32_t> index_of;
+  for (const auto& [image_id, image] : scene.images) {
+    index_of.emplace(image_id, static_cast<uint32_t>(index_of.size()));
+  }
+  std::vector<std::vector<uint32_t>> visibility;
+  visibility.reserve(seen.size());
+  for (const std::vector<image_t>& ids : seen) {
+    std::vector<uint32_t>& indices = visibility.emplace_back();
+    for (image_t id : ids) indices.push_back(index_of.at(id));
+  }
+  fs::create_directories(output_folder);
+  fs::create_directories(fs::absolute(fused_path).parent_path());
+  PlyWriteOptions write_options;
+  write_options.comment = "bayon dense";
+  WritePointCloudPly(cloud, output_path, write_options);
+  WriteColmapFusedPly(cloud, fused_path, "bayon dense", &visibility);
+  WriteFileAtomically(report_path,
+                      ReportToJson(report, options).dump(2) + "\n");
+  command.PrintSummary(report.Summary() + "\n  -> " + output_path + ", " +
+                       fused_path);
+  return 0;
+}
+
+}  // namespace bayon
