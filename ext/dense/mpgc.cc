@@ -230,7 +230,11 @@ bool BuildSystem(const MpgcView& master,
     if (!options.lsm.estimate_radiometry) {
       enabled[kLsmR0] = enabled[kLsmR1] = false;
     }
-    state.active = SelectLsmParameters(state.equations.N, enabled, options.lsm);
+    // SelectLsmParameters answers which parameters are held (not
+    // determinable or not enabled).
+    const std::array<bool, kNumLsmParams> held =
+        SelectLsmParameters(state.equations.N, enabled, options.lsm);
+    for (int p = 0; p < kNumLsmParams; ++p) state.active[p] = !held[p];
     // The geometry fixes what the texture leaves open.
     state.active[kLsmA0] = state.active[kLsmB0] = true;
     LsmMatrix N = state.equations.N;
@@ -351,6 +355,14 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
       std::max_element(score.begin(), score.end()) - score.begin());
   result.ncc = score[best];
   result.num_views = views[best];
+  const int apart =
+      static_cast<int>(std::ceil(options.window_radius / options.step_px));
+  for (int k = 1; k + 1 < n; ++k) {
+    if (std::abs(k - best) > apart && score[k] >= score[k - 1] &&
+        score[k] >= score[k + 1]) {
+      result.second_ncc = std::max(result.second_ncc, score[k]);
+    }
+  }
   double k = best;
   if (best > 0 && best < n - 1 && score[best - 1] > -2 &&
       score[best + 1] > -2) {
@@ -465,24 +477,33 @@ MpgcResult MatchMpgc(const MpgcView& master,
         result.status = MpgcStatus::kSingular;
         return result;
       }
-      // Step control: halve the step while the sum of squares grows.
+      // Step control as lsm.h's: where a step makes the sum of squares grow
+      // (the period-two oscillation that resampling can drive), it is
+      // halved, up to four times; a step that had to be shortened to a
+      // small one ends the iteration there, as a converged one does.
       const Eigen::Vector3d xyz_before = xyz;
       const std::vector<PatchState> patches_before = patches;
-      double largest_move = 0;
       System trial;
-      for (int halving = 0; halving < 4; ++halving) {
+      double largest_move = 0;
+      for (int halving = 0; halving < 5; ++halving) {
+        if (halving > 0) delta *= 0.5;
         xyz = xyz_before + delta.head<3>();
         patches = patches_before;
         largest_move = 0;
         for (size_t k = 0; k < patches.size(); ++k) {
-          LsmVector d = delta.segment<kNumLsmParams>(3 + kNumLsmParams * k);
+          const LsmVector d = delta.segment<kNumLsmParams>(
+              3 + kNumLsmParams * static_cast<int>(k));
           patches[k].params.Add(d);
-          largest_move = std::max(largest_move, d.head<2>().norm());
+          // A patch moves by its centre's shift and by its shape's change
+          // at its corners, as lsm.h judges single patches.
+          const double corners = options.lsm.patch_radius *
+                                 (std::abs(d[kLsmA1]) + std::abs(d[kLsmA2]) +
+                                  std::abs(d[kLsmB1]) + std::abs(d[kLsmB2]));
+          largest_move = std::max({largest_move, d.head<2>().norm(), corners});
         }
         failed = -2;
         built = build(&failed, &trial);
         if (built && trial.cost <= system.cost) break;
-        delta *= 0.5;
       }
       system = std::move(trial);
       // Patches that wandered off their approximation show something else.
@@ -519,6 +540,19 @@ MpgcResult MatchMpgc(const MpgcView& master,
             lowest = r;
             drop = static_cast<int>(k);
           }
+        }
+      }
+    }
+    if (drop < 0 && !converged && built &&
+        static_cast<int>(patches.size()) > options.min_search_views) {
+      // A patch that shows something else (an occluder, a blunder) keeps
+      // the joint solution from settling: the one that fits worst goes.
+      double lowest = 2;
+      for (size_t k = 0; k < patches.size(); ++k) {
+        const double r = patches[k].equations.Correlation();
+        if (r < lowest) {
+          lowest = r;
+          drop = static_cast<int>(k);
         }
       }
     }

@@ -27,7 +27,9 @@
 // moves more than max_shift_px from its approximation, or whose correlation
 // with the template stays below min_correlation after convergence is
 // dropped (the worst one first) and the point solved again from the rest;
-// the point fails when fewer than min_search_views remain.
+// where the joint solution does not converge, the worst-correlating patch
+// is dropped likewise. The point fails when fewer than min_search_views
+// remain.
 #pragma once
 
 #include "ext/core/camera.h"
@@ -60,7 +62,7 @@ struct MpgcOptions {
   // kinds of observation.
   double grey_sigma = 2.0;
   double geometric_sigma_px = 0.1;
-  int max_iterations = 30;
+  int max_iterations = 60;
   // Converged when no patch centre moves by more than this, pixels.
   double convergence_px = 0.005;
   // A search patch whose centre moves further from its approximation is
@@ -128,6 +130,10 @@ struct EpipolarSearchResult {
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   double distance = 0;  // from the master's projection centre, object units
   double ncc = -1;      // mean over the views
+  // The best score elsewhere along the ray (a local maximum more than a
+  // window radius of epipolar travel away): near `ncc` where the texture
+  // repeats along the epipolar lines and the match is ambiguous. -2: none.
+  double second_ncc = -2;
   int num_views = 0;
   int num_samples = 0;
 };

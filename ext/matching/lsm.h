@@ -231,7 +231,8 @@ struct LsmMatch {
 };
 
 // Adaptive selection (header comment): which parameters the normal matrix
-// can determine, given the ones `enabled`.
+// can determine, given the ones `enabled`. Returns the held ones (true: not
+// estimated), as LsmMatch::held.
 std::array<bool, kNumLsmParams> SelectLsmParameters(
     const LsmMatrix& N,
     const std::array<bool, kNumLsmParams>& enabled,
