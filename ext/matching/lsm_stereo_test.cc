@@ -26,6 +26,7 @@
 #include "ext/features/moravec.h"
 #include "ext/image/image_io.h"
 #include "ext/matching/keypoint_refinement.h"
+#include "ext/matching/stereo_gt_testing.h"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
@@ -47,21 +48,6 @@ constexpr double kBlunderPx = 1.0;
 constexpr double kMaxTruthDisagreementPx = 1.0;
 // Largest RMS deviation of the window's truth from a plane, pixels.
 constexpr double kMaxPlaneResidualPx = 0.15;
-
-struct StereoPair {
-  cv::Mat left, right;              // CV_32F grey
-  cv::Mat left_truth, right_truth;  // CV_8U, 4 x disparity, 0 unknown
-};
-
-StereoPair ReadStereoPair(const std::string& scene) {
-  const std::string dir = testing::DataPath("stereo-gt/" + scene);
-  StereoPair pair;
-  pair.left = ReadImageGrayFloat(dir + "/im2.png");
-  pair.right = ReadImageGrayFloat(dir + "/im6.png");
-  pair.left_truth = ReadImage(dir + "/disp2.png", ImageReadMode::kGray);
-  pair.right_truth = ReadImage(dir + "/disp6.png", ImageReadMode::kGray);
-  return pair;
-}
 
 // Zero-mean, unit-norm window of side 2 kRadius + 1 around pixel (col, row);
 // false where it leaves the image or is flat.
@@ -94,7 +80,7 @@ bool NormalizedWindow(const cv::Mat& image,
 
 // Disparity along the row by the NCC peak and a parabola through it; false
 // where the peak is at the end of the range or a window leaves the image.
-bool ParabolaDisparity(const StereoPair& pair,
+bool ParabolaDisparity(const testing::StereoPair& pair,
                        int col,
                        int row,
                        double* disparity) {
@@ -120,37 +106,6 @@ bool ParabolaDisparity(const StereoPair& pair,
   return true;
 }
 
-// The truth over the window as a plane d = p0 + p1 u + p2 v: false where a
-// value is unknown or the plane misses them by more than
-// kMaxPlaneResidualPx RMS; else the plane's value at the point.
-bool PlanarTruth(const cv::Mat& truth, int col, int row, double* disparity) {
-  if (col < kRadius || row < kRadius || col + kRadius >= truth.cols ||
-      row + kRadius >= truth.rows) {
-    return false;
-  }
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  double sum_sq = 0;
-  int n = 0;
-  for (int v = -kRadius; v <= kRadius; ++v) {
-    for (int u = -kRadius; u <= kRadius; ++u) {
-      const int value = truth.at<uint8_t>(row + v, col + u);
-      if (value == 0) return false;
-      const double d = value / 4.0;
-      const Eigen::Vector3d a(1, u, v);
-      normal += a * a.transpose();
-      rhs += a * d;
-      sum_sq += d * d;
-      ++n;
-    }
-  }
-  const Eigen::Vector3d plane = normal.ldlt().solve(rhs);
-  const double residual_sq = std::max(0.0, sum_sq - rhs.dot(plane));
-  if (std::sqrt(residual_sq / (n - 3)) > kMaxPlaneResidualPx) return false;
-  *disparity = plane[0];
-  return true;
-}
-
 struct PointResult {
   double truth = 0;         // at the pixel (quarter pixels)
   bool planar = false;      // valid truth (header comment)
@@ -169,7 +124,7 @@ struct SceneResult {
 };
 
 SceneResult EvaluateScene(const std::string& scene) {
-  const StereoPair pair = ReadStereoPair(scene);
+  const testing::StereoPair pair = testing::ReadStereoPair(scene);
   MoravecOptions moravec;
   moravec.max_num_features = 2000;
   moravec.border_px = kRadius + 3;
@@ -200,7 +155,12 @@ SceneResult EvaluateScene(const std::string& scene) {
       ++result.num_no_peak;
       continue;
     }
-    p.planar = PlanarTruth(pair.left_truth, col, row, &p.planar_truth);
+    p.planar = testing::PlanarTruth(pair.left_truth,
+                                    col,
+                                    row,
+                                    kRadius,
+                                    kMaxPlaneResidualPx,
+                                    &p.planar_truth);
     const Eigen::Vector2d left_xy(col + 0.5, row + 0.5);
     const ObservationRefinement lsm =
         RefineObservation(left,
