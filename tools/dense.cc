@@ -151,6 +151,9 @@ int RunDense(int argc, char** argv) {
   app.add_option("--min_ncc",
                  options.search.min_ncc,
                  "Smallest mean correlation of an approximation");
+  app.add_option("--min_peak_margin",
+                 options.min_peak_margin,
+                 "Approximations: best minus second peak along the ray");
   app.add_option("--best_views",
                  options.search.best_views,
                  "Approximations: score of the best n views (0 = all)");

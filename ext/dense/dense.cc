@@ -66,6 +66,8 @@ void DenseOptions::Check() const {
   CheckOption(
       sparse_tolerance >= 0, "--sparse_tolerance", ">= 0", sparse_tolerance);
   CheckOption(max_sigma_gsd > 0, "--max_sigma_gsd", "> 0", max_sigma_gsd);
+  CheckOption(
+      min_peak_margin >= 0, "--min_peak_margin", ">= 0", min_peak_margin);
   CheckOption(surface_radius_cells >= 1,
               "--surface_radius_cells",
               ">= 1",
@@ -83,6 +85,8 @@ const char* DenseRejectName(DenseReject reason) {
       return "no_texture";
     case DenseReject::kNoApproximation:
       return "no_approximation";
+    case DenseReject::kAmbiguous:
+      return "ambiguous";
     case DenseReject::kMpgcOutside:
       return "outside_image";
     case DenseReject::kMpgcFlat:
@@ -474,6 +478,10 @@ void MatchCell(const MpgcView& master,
                                                      options.search);
   if (!found.found) {
     cell->reason = DenseReject::kNoApproximation;
+    return;
+  }
+  if (found.ncc - found.second_ncc < options.min_peak_margin) {
+    cell->reason = DenseReject::kAmbiguous;
     return;
   }
   cell->mpgc = MatchMpgc(master, cell->xy, search, found.xyz, options.mpgc);

@@ -77,6 +77,9 @@ struct DenseOptions {
   double sparse_radius_px = 60;
   double sparse_tolerance = 0.05;
   EpipolarSearchOptions search;
+  // The best correlation along the ray must exceed the best elsewhere on it
+  // by this much (repetitive texture); 0: off.
+  double min_peak_margin = 0.0;
   MpgcOptions mpgc;
   double max_sigma_gsd = 2.0;
   // Off-surface test: a point whose depth misses the plane of its
@@ -105,6 +108,7 @@ enum class DenseReject {
   kNoTexture,        // no Moravec point reaches min_interest in the cell
   kNoApproximation,  // correlation along the ray stayed below min_ncc, or
                      // no coarse point around to bound the search
+  kAmbiguous,        // a second peak along the ray nearly as high
   kMpgcOutside,      // the MPGC statuses (mpgc.h)
   kMpgcFlat,
   kMpgcBehind,
