@@ -154,6 +154,10 @@ int RunDense(int argc, char** argv) {
   app.add_option("--min_peak_margin",
                  options.min_peak_margin,
                  "Approximations: best minus second peak along the ray");
+  app.add_option("--min_view_ncc",
+                 options.min_view_ncc,
+                 "Views correlating less at the approximation stay out of "
+                 "the point's MPGC");
   app.add_option("--best_views",
                  options.search.best_views,
                  "Approximations: score of the best n views (0 = all)");
@@ -181,6 +185,13 @@ int RunDense(int argc, char** argv) {
                  options.max_sigma_gsd,
                  "Reject points with a larger sigma along the master ray, "
                  "in ground sampling distances");
+  app.add_option("--off_surface_gsd",
+                 options.off_surface_gsd,
+                 "Reject points off the plane of their neighbours by more "
+                 "than this many GSDs (and 3 sigma)");
+  app.add_option("--surface_radius_cells",
+                 options.surface_radius_cells,
+                 "Neighbours of the off-surface test: cells around");
   app.add_option("--num_threads", options.num_threads, "-1 = all cores");
   app.add_option("--overwrite", overwrite, "Replace existing output files");
   app.add_option(

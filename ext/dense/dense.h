@@ -80,6 +80,9 @@ struct DenseOptions {
   // The best correlation along the ray must exceed the best elsewhere on it
   // by this much (repetitive texture); 0: off.
   double min_peak_margin = 0.0;
+  // Search views whose correlation at the approximation is below this are
+  // left out of the point's MPGC (hidden there, or lit beyond recognition).
+  double min_view_ncc = 0.5;
   MpgcOptions mpgc;
   double max_sigma_gsd = 2.0;
   // Off-surface test: a point whose depth misses the plane of its
@@ -151,7 +154,9 @@ struct DenseImage {
   cv::Mat color;
 };
 
-// A cloud with per-point attributes sx sy sz (object units), num_images,
+// A cloud with per-point attributes sx sy sz (object units), s_normal (the
+// standard deviation along the point's normal, from the full covariance),
+// num_images,
 // master_id, sigma0 (grey values) and correlation (mean over the search
 // patches), with normals and colours; `visibility` (if not null) gets, per
 // point, the image ids it was matched in (the master first).

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numeric>
 #include <optional>
 
@@ -317,6 +318,20 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
         1 / min_distance + k / (n - 1) * (1 / max_distance - 1 / min_distance);
     return 1 / inverse;
   };
+  // The master window against one view at an object point; false where
+  // the point projects outside it.
+  const auto correlate = [&](const MpgcView& view,
+                             const Eigen::Vector3d& xyz,
+                             double* correlation) {
+    Eigen::Vector2d xy;
+    Eigen::Matrix2d shape;
+    return Project(view, xyz, &xy) && InducedShape(*rays, view, xyz, &shape) &&
+           LsmCorrelation(window,
+                          *view.image,
+                          LsmParameters::At(xy, shape),
+                          Interpolation::kBilinear,
+                          correlation);
+  };
   std::vector<double> score(n, -2);
   std::vector<int> views(n, 0);
   std::vector<double> correlations;
@@ -324,18 +339,10 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
     const Eigen::Vector3d xyz = origin + distance_of(k) * direction;
     correlations.clear();
     for (const MpgcView& view : search) {
-      Eigen::Vector2d xy;
-      Eigen::Matrix2d shape;
       double correlation = 0;
-      if (!Project(view, xyz, &xy) || !InducedShape(*rays, view, xyz, &shape) ||
-          !LsmCorrelation(window,
-                          *view.image,
-                          LsmParameters::At(xy, shape),
-                          Interpolation::kBilinear,
-                          &correlation)) {
-        continue;
+      if (correlate(view, xyz, &correlation)) {
+        correlations.push_back(correlation);
       }
-      correlations.push_back(correlation);
     }
     views[k] = static_cast<int>(correlations.size());
     if (views[k] < options.min_views) continue;
@@ -375,6 +382,10 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   }
   result.distance = distance_of(k);
   result.xyz = origin + result.distance * direction;
+  result.view_ncc.assign(search.size(), -2);
+  for (size_t j = 0; j < search.size(); ++j) {
+    correlate(search[j], result.xyz, &result.view_ncc[j]);
+  }
   result.found = result.ncc >= options.min_ncc;
   return result;
 }
@@ -443,20 +454,55 @@ MpgcResult MatchMpgc(const MpgcView& master,
                        system);
   };
   // Solve; drop the worst search patch and solve again while one fails.
+  // After a drop at convergence the rest start from where they were (their
+  // solution barely changes without the culprit); after a divergence, from
+  // the approximation.
+  for (PatchState& state : patches) state.params = state.start;
+  const auto small_step = [&](const Eigen::VectorXd& delta) {
+    // A patch moves by its centre's shift and by its shape's change at its
+    // corners, as lsm.h judges single patches.
+    for (size_t k = 0; k < patches.size(); ++k) {
+      const LsmVector d =
+          delta.segment<kNumLsmParams>(3 + kNumLsmParams * static_cast<int>(k));
+      const double corners = options.lsm.patch_radius *
+                             (std::abs(d[kLsmA1]) + std::abs(d[kLsmA2]) +
+                              std::abs(d[kLsmB1]) + std::abs(d[kLsmB2]));
+      if (d.head<2>().norm() >= options.convergence_px ||
+          corners >= options.convergence_px) {
+        return false;
+      }
+    }
+    return true;
+  };
   while (true) {
     if (static_cast<int>(patches.size()) < options.min_search_views) {
       result.status = MpgcStatus::kTooFewViews;
       return result;
     }
-    xyz = approximation;
-    for (PatchState& state : patches) state.params = state.start;
     int drop = -2;  // index into patches; -2: none
     bool converged = false;
-    // The system at the current state: built once here, then carried over
-    // from the step that reached each next state.
     System system;
     int failed = -2;
     bool built = build(&failed, &system);
+    // Step control as lsm.h's: where a step makes the sum of squares grow
+    // (the period-two oscillation that resampling can drive), half of it is
+    // taken from where it started instead; a halved step that is small
+    // ends the iteration as a converged one does. One system per
+    // iteration.
+    Eigen::Vector3d step_xyz = xyz;
+    std::vector<LsmParameters> step_params(patches.size());
+    double step_cost = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd delta;
+    const auto take = [&](const Eigen::VectorXd& step) {
+      xyz = step_xyz + step.head<3>();
+      for (size_t k = 0; k < patches.size(); ++k) {
+        patches[k].params = step_params[k];
+        patches[k].params.Add(step.segment<kNumLsmParams>(
+            3 + kNumLsmParams * static_cast<int>(k)));
+      }
+      failed = -2;
+      built = build(&failed, &system);
+    };
     int iteration = 0;
     for (; iteration < options.max_iterations; ++iteration) {
       if (!built) {
@@ -467,45 +513,32 @@ MpgcResult MatchMpgc(const MpgcView& master,
         drop = failed;
         break;
       }
+      if (system.cost > step_cost) {
+        delta *= 0.5;
+        take(delta);
+        if (small_step(delta)) {
+          converged = built;
+          ++iteration;
+          break;
+        }
+        continue;
+      }
+      step_xyz = xyz;
+      for (size_t k = 0; k < patches.size(); ++k) {
+        step_params[k] = patches[k].params;
+      }
+      step_cost = system.cost;
       const Eigen::LDLT<Eigen::MatrixXd> ldlt(system.N);
       if (ldlt.info() != Eigen::Success) {
         result.status = MpgcStatus::kSingular;
         return result;
       }
-      Eigen::VectorXd delta = ldlt.solve(system.rhs);
+      delta = ldlt.solve(system.rhs);
       if (!delta.allFinite()) {
         result.status = MpgcStatus::kSingular;
         return result;
       }
-      // Step control as lsm.h's: where a step makes the sum of squares grow
-      // (the period-two oscillation that resampling can drive), it is
-      // halved, up to four times; a step that had to be shortened to a
-      // small one ends the iteration there, as a converged one does.
-      const Eigen::Vector3d xyz_before = xyz;
-      const std::vector<PatchState> patches_before = patches;
-      System trial;
-      double largest_move = 0;
-      for (int halving = 0; halving < 5; ++halving) {
-        if (halving > 0) delta *= 0.5;
-        xyz = xyz_before + delta.head<3>();
-        patches = patches_before;
-        largest_move = 0;
-        for (size_t k = 0; k < patches.size(); ++k) {
-          const LsmVector d = delta.segment<kNumLsmParams>(
-              3 + kNumLsmParams * static_cast<int>(k));
-          patches[k].params.Add(d);
-          // A patch moves by its centre's shift and by its shape's change
-          // at its corners, as lsm.h judges single patches.
-          const double corners = options.lsm.patch_radius *
-                                 (std::abs(d[kLsmA1]) + std::abs(d[kLsmA2]) +
-                                  std::abs(d[kLsmB1]) + std::abs(d[kLsmB2]));
-          largest_move = std::max({largest_move, d.head<2>().norm(), corners});
-        }
-        failed = -2;
-        built = build(&failed, &trial);
-        if (built && trial.cost <= system.cost) break;
-      }
-      system = std::move(trial);
+      take(delta);
       // Patches that wandered off their approximation show something else.
       double worst = options.max_shift_px;
       for (size_t k = 0; k < patches.size(); ++k) {
@@ -517,34 +550,27 @@ MpgcResult MatchMpgc(const MpgcView& master,
         }
       }
       if (drop >= 0) break;
-      if (largest_move < options.convergence_px) {
-        converged = true;
+      if (small_step(delta)) {
+        converged = built;
         ++iteration;
         break;
       }
     }
+    result.iterations += iteration;
+    bool warm = false;
     if (drop < 0 && converged) {
-      // The final statistics at the solution (its system is the last
-      // step's).
-      if (!built) {
-        drop = failed >= 0 ? failed : -2;
-        if (failed == -1) {
-          result.status = MpgcStatus::kOutsideImage;
-          return result;
-        }
-      } else {
-        double lowest = options.min_correlation;
-        for (size_t k = 0; k < patches.size(); ++k) {
-          const double r = patches[k].equations.Correlation();
-          if (r < lowest) {
-            lowest = r;
-            drop = static_cast<int>(k);
-          }
+      // A search patch that does not look like the template after all.
+      double lowest = options.min_correlation;
+      for (size_t k = 0; k < patches.size(); ++k) {
+        const double r = patches[k].equations.Correlation();
+        if (r < lowest) {
+          lowest = r;
+          drop = static_cast<int>(k);
         }
       }
-    }
-    if (drop < 0 && !converged && built &&
-        static_cast<int>(patches.size()) > options.min_search_views) {
+      warm = true;
+    } else if (drop < 0 && built &&
+               static_cast<int>(patches.size()) > options.min_search_views) {
       // A patch that shows something else (an occluder, a blunder) keeps
       // the joint solution from settling: the one that fits worst goes.
       double lowest = 2;
@@ -559,9 +585,12 @@ MpgcResult MatchMpgc(const MpgcView& master,
     if (drop >= 0) {
       result.dropped.push_back(patches[drop].view);
       patches.erase(patches.begin() + drop);
+      if (!warm) {
+        xyz = approximation;
+        for (PatchState& state : patches) state.params = state.start;
+      }
       continue;
     }
-    result.iterations = iteration;
     if (!converged) {
       result.status = MpgcStatus::kNotConverged;
       result.xyz = xyz;

@@ -62,7 +62,7 @@ struct MpgcOptions {
   // kinds of observation.
   double grey_sigma = 2.0;
   double geometric_sigma_px = 0.1;
-  int max_iterations = 60;
+  int max_iterations = 30;
   // Converged when no patch centre moves by more than this, pixels.
   double convergence_px = 0.005;
   // A search patch whose centre moves further from its approximation is
@@ -136,6 +136,9 @@ struct EpipolarSearchResult {
   double second_ncc = -2;
   int num_views = 0;
   int num_samples = 0;
+  // Per search view, its correlation at `xyz` (-2 where it projects
+  // outside): which views show the point at all.
+  std::vector<double> view_ncc;
 };
 
 EpipolarSearchResult SearchMasterRay(const MpgcView& master,

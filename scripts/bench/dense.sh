@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# `bayon dense` (MPGC, CPU): points per second, peak memory and, where the
+# truth is known, accuracy and completeness.
+#   tower     the rendered tower (`bayon synth --scene tower`, 1800 x 1200,
+#             16 views) with its true orientation and calibration, 5 masters;
+#             judged by `bayon evaluate` against the true surface
+#             (completeness within 5 GSD: the dense pattern's 7-pixel cells
+#             leave points about 5 pixels apart at most)
+#   temple    ../shared/data/temple-ring, bayon's own orientation (the chain
+#   fountain  benchmark's adjusted models; it runs first where they are
+#             missing), 5 masters
+# Threads: $BAYON_THREADS (default 2, the CI machine's cores).
+set -euo pipefail
+dir="$(cd "$(dirname "$0")/../.." && pwd)/build/bench/dense"
+chain_dir="$(dirname "$dir")/chain"
+threads="${BAYON_THREADS:-2}"
+mkdir -p "$dir"
+source "$(dirname "$0")/lib/timing.sh"
+
+if [ ! -d "$chain_dir/temple/adjusted" ] ||
+  [ ! -d "$chain_dir/fountain/adjusted" ]; then
+  echo "dense.sh: bayon's orientations first (scripts/bench/chain.sh)"
+  bash "$(dirname "$0")/chain.sh" >/dev/null
+fi
+
+tower="$dir/tower"
+if [ ! -f "$tower/ws/gt/synth.json" ]; then
+  rm -rf "$tower"
+  mkdir -p "$tower"
+  "$BAYON" synth --scene tower --output_path "$tower/ws" --seed 2 \
+    --num_heldout_views 0 --num_threads "$threads" >"$tower/synth.log" 2>&1
+fi
+rm -rf "$tower/model" "$tower/dense"
+cp -r "$tower/ws/gt/sparse" "$tower/model"
+cp "$tower/ws/gt/calibration.json" "$tower/model/"
+
+# dense NAME IMAGES MODEL [ARGS...]
+dense() {
+  local name="$1" images="$2" model="$3"
+  shift 3
+  mkdir -p "$dir/$name"
+  timed "$dir/$name/dense" "$BAYON" dense --image_path "$images" \
+    --input_path "$model" --output_path "$dir/$name/dense/points.ply" \
+    --overwrite 1 --num_threads "$threads" "$@"
+}
+dense tower "$tower/ws/images" "$tower/model" --min_depth 5 --max_depth 20
+"$BAYON" evaluate --ground_truth_path "$tower/ws/gt" \
+  --cloud_path "$dir/tower/dense/points.ply" --completeness_threshold_gsd 5 \
+  --output_path "$dir/tower/evaluation.json" >"$dir/tower/evaluate.log" 2>&1 ||
+  { cat "$dir/tower/evaluate.log" >&2; exit 1; }
+dense temple "$BAYON_DATA_DIR/temple-ring" "$chain_dir/temple/adjusted"
+dense fountain "$BAYON_DATA_DIR/fountain-P11/images" \
+  "$chain_dir/fountain/adjusted"
+
+printf '\n%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s\n' set cells points \
+  time "cells/s" "points/s" peak "acc med" "acc RMS" "acc p95" complete
+printf '%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s\n' "" "" "" s "" "" MB \
+  GSD GSD GSD "5 GSD"
+for name in tower temple fountain; do
+  read -r cells points < <(python3 -c '
+import json, sys
+r = json.load(open(sys.argv[1]))
+print(r["num_cells"], r["num_points"])' "$dir/$name/dense/points.json")
+  t=$(wall_s "$dir/$name/dense")
+  m=$(peak_mb "$dir/$name/dense")
+  accuracy="- - - -"
+  if [ -f "$dir/$name/evaluation.json" ]; then
+    accuracy=$(python3 -c '
+import json, sys
+c = json.load(open(sys.argv[1]))["cloud"]
+a = c["accuracy_gsd"]
+print("%.2f %.2f %.2f %.1f%%" % (a["median"], a["rms"], a["p95"],
+                                  100 * c["completeness_fraction"]))' \
+      "$dir/$name/evaluation.json")
+  fi
+  read -r med rms p95 complete <<<"$accuracy"
+  awk -v n="$name" -v c="$cells" -v p="$points" -v t="$t" -v m="$m" \
+    -v a="$med" -v r="$rms" -v q="$p95" -v k="$complete" 'BEGIN {
+      printf "%-9s %8d %8d %8.1f %8.0f %9.0f %9d %7s %9s %9s %9s\n",
+        n, c, p, t, c / t, p / t, m, a, r, q, k }'
+done
+echo
+echo "cells: the dense pattern's cells in all masters (each tried: textured"
+echo "ones matched, the rest rejected at once); points: those accepted."
+echo "tower: true orientation; temple, fountain: bayon's own (chain.sh)."
+echo "Threads: $threads. Reject reasons per master: build/bench/dense/*/dense/points.json"
