@@ -156,7 +156,10 @@ TEST(DenseCommand, TowerAgainstTheTrueSurface) {
   const double gsd = report["cloud"]["gsd_m"].get<double>();
   const double median_gsd =
       report["cloud"]["accuracy_gsd"]["median"].get<double>();
-  EXPECT_LT(median_gsd, 1.0);
+  EXPECT_LT(median_gsd, 0.5);  // measured 0.31
+  // Measured 0.94 (the issue's bound is 1 GSD, met by the full-size tower
+  // of scripts/bench.sh dense too).
+  EXPECT_LT(report["cloud"]["accuracy_gsd"]["rms"].get<double>(), 1.2);
 
   const PointCloud errors = ReadPointCloudPly(ws + "/errors.ply");
   const PointAttribute& distance = *errors.FindAttribute("distance_m");
@@ -180,7 +183,7 @@ TEST(DenseCommand, TowerAgainstTheTrueSurface) {
       blunders,
       errors.size(),
       median_ratio);
-  EXPECT_LT(blunders, errors.size() / 10);
+  EXPECT_LT(blunders, errors.size() / 50);  // measured 14 of 2880
   // Measured 2.46: on this tower, in its changing light, the reported
   // standard deviations are optimistic by that factor (the issue asks for
   // 1.5; on the exactly rendered plane of dense_test they are pessimistic

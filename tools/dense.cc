@@ -189,6 +189,9 @@ int RunDense(int argc, char** argv) {
                  options.off_surface_gsd,
                  "Reject points off the plane of their neighbours by more "
                  "than this many GSDs (and 3 sigma)");
+  app.add_option("--min_neighbors",
+                 options.min_neighbors,
+                 "Reject points with fewer accepted neighbours (isolated)");
   app.add_option("--surface_radius_cells",
                  options.surface_radius_cells,
                  "Neighbours of the off-surface test: cells around");

@@ -108,6 +108,8 @@ const char* DenseRejectName(DenseReject reason) {
       return "imprecise";
     case DenseReject::kOffSurface:
       return "off_surface";
+    case DenseReject::kIsolated:
+      return "isolated";
     case DenseReject::kNumReasons:
       break;
   }
@@ -517,20 +519,22 @@ void MatchCell(const MpgcView& master,
   cell->depth = depth;
 }
 
-// Whether an accepted cell's depth disagrees with the surface of its
-// accepted neighbours (within `radius` cells): inverse depth, linear in the
-// master's pixel coordinates over a plane, fitted to the neighbours, once
-// more without those off by more than three robust sigmas; the cell is off
-// when it misses the fit by more than max(3 sigma along its ray,
-// off_surface_gsd ground sampling distances). Cells with fewer than five
-// neighbours are not judged.
-bool OffSurface(const std::vector<Cell>& cells,
-                int cols,
-                int rows,
-                int index,
-                int radius,
-                double off_surface_gsd,
-                double gsd_per_depth) {
+// Whether an accepted cell's depth agrees with the surface of its accepted
+// neighbours (within `radius` cells): inverse depth, linear in the master's
+// pixel coordinates over a plane, fitted to the neighbours (with five or
+// more, once more without those off by more than three robust sigmas); the
+// cell is off when it misses the fit by more than max(3 sigma along its
+// ray, off_surface_gsd ground sampling distances). A cell with fewer than
+// min_neighbors accepted neighbours is isolated: nothing confirms it, and
+// the blunders that MPGC lets through are mostly such (on the rendered
+// tower, most of those beyond 20 GSD).
+DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
+                           int cols,
+                           int rows,
+                           int index,
+                           const DenseOptions& options,
+                           double gsd_per_depth) {
+  const int radius = options.surface_radius_cells;
   const int cx = index % cols, cy = index / cols;
   const Cell& own = cells[index];
   std::vector<Eigen::Vector3d> rows_uvw;  // (du, dv, 1/depth)
@@ -544,10 +548,13 @@ bool OffSurface(const std::vector<Cell>& cells,
           cell.xy.x() - own.xy.x(), cell.xy.y() - own.xy.y(), 1 / cell.depth);
     }
   }
-  if (rows_uvw.size() < 5) return false;
+  if (static_cast<int>(rows_uvw.size()) < options.min_neighbors) {
+    return DenseReject::kIsolated;
+  }
   std::vector<bool> use(rows_uvw.size(), true);
   double predicted = 0;
-  for (int pass = 0; pass < 2; ++pass) {
+  const int passes = rows_uvw.size() >= 5 ? 2 : 1;
+  for (int pass = 0; pass < passes; ++pass) {
     Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
     for (size_t k = 0; k < rows_uvw.size(); ++k) {
@@ -557,9 +564,9 @@ bool OffSurface(const std::vector<Cell>& cells,
       b += a * rows_uvw[k].z();
     }
     const Eigen::Vector3d plane = N.ldlt().solve(b);
-    if (!plane.allFinite()) return false;
+    if (!plane.allFinite()) return DenseReject::kAccepted;
     predicted = plane(0);
-    if (pass == 1) break;
+    if (pass + 1 == passes) break;
     std::vector<double> residuals;
     for (const Eigen::Vector3d& r : rows_uvw) {
       residuals.push_back(
@@ -571,12 +578,14 @@ bool OffSurface(const std::vector<Cell>& cells,
       use[k] = residuals[k] <= limit;
       kept += use[k];
     }
-    if (kept < 5) return false;
+    if (kept < 3) break;
   }
-  if (!(predicted > 0)) return false;
+  if (!(predicted > 0)) return DenseReject::kAccepted;
   const double miss = std::abs(1 / predicted - own.depth);
   const double gsd = own.depth * gsd_per_depth;
-  return miss > std::max(3 * own.sigma_gsd * gsd, off_surface_gsd * gsd);
+  return miss > std::max(3 * own.sigma_gsd * gsd, options.off_surface_gsd * gsd)
+             ? DenseReject::kOffSurface
+             : DenseReject::kAccepted;
 }
 
 // The unit normal of the plane through the accepted points of the cells
@@ -737,20 +746,19 @@ PointCloud DenseReconstruct(const Scene& scene,
     // Blunders that MPGC's own tests let through: off the surface of their
     // neighbours (judged all at once, so that one blunder does not change
     // the verdict on another).
-    std::vector<int> off;
+    std::vector<std::pair<int, DenseReject>> verdicts;
     for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
-      if (cells[i].reason == DenseReject::kAccepted &&
-          OffSurface(cells,
-                     cols,
-                     rows,
-                     i,
-                     options.surface_radius_cells,
-                     options.off_surface_gsd,
-                     1 / master.camera->MeanFocalLengthPx())) {
-        off.push_back(i);
-      }
+      if (cells[i].reason != DenseReject::kAccepted) continue;
+      const DenseReject verdict =
+          SurfaceVerdict(cells,
+                         cols,
+                         rows,
+                         i,
+                         options,
+                         1 / master.camera->MeanFocalLengthPx());
+      if (verdict != DenseReject::kAccepted) verdicts.push_back({i, verdict});
     }
-    for (int i : off) cells[i].reason = DenseReject::kOffSurface;
+    for (const auto& [i, verdict] : verdicts) cells[i].reason = verdict;
 
     DenseMasterReport master_report;
     master_report.master = selection.master;

@@ -90,6 +90,8 @@ struct DenseOptions {
   // max(3 sigma, off_surface_gsd GSDs) is a blunder.
   int surface_radius_cells = 2;
   double off_surface_gsd = 3.0;
+  // Fewer accepted neighbours within surface_radius_cells: isolated.
+  int min_neighbors = 3;
   int num_threads = -1;
   DenseOptions();      // the dense stage's own defaults for search and mpgc
   void Check() const;  // throws InputError naming field, value, rule
@@ -120,6 +122,7 @@ enum class DenseReject {
   kMpgcSingular,
   kImprecise,   // sigma along the ray above max_sigma_gsd
   kOffSurface,  // off the plane of its neighbours
+  kIsolated,    // too few accepted neighbours to confirm it
   kNumReasons
 };
 const char* DenseRejectName(DenseReject reason);
