@@ -148,6 +148,9 @@ int RunDense(int argc, char** argv) {
   app.add_option("--window_radius",
                  options.search.window_radius,
                  "Correlation window along the ray: radius, px");
+  app.add_option("--search_step_px",
+                 options.search.step_px,
+                 "Approximations: largest epipolar step between ray samples");
   app.add_option("--min_ncc",
                  options.search.min_ncc,
                  "Smallest mean correlation of an approximation");
@@ -158,6 +161,9 @@ int RunDense(int argc, char** argv) {
                  options.min_view_ncc,
                  "Views correlating less at the approximation stay out of "
                  "the point's MPGC");
+  app.add_option("--num_ray_views",
+                 options.num_ray_views,
+                 "Approximations: search in the nearest n search images");
   app.add_option("--best_views",
                  options.search.best_views,
                  "Approximations: score of the best n views (0 = all)");

@@ -31,6 +31,11 @@ DenseOptions::DenseOptions() {
   // The two best views: a ring has a neighbour on each side, and a point
   // hidden on one side is still seen on the other.
   search.best_views = 2;
+  // One-pixel steps along the epipolar lines: the parabola through the
+  // best sample and its neighbours is as good a start for MPGC as half-pixel
+  // steps give (rendered tower: 3510 points at RMS 1.00 GSD against 3571 at
+  // 0.97), in half the time.
+  search.step_px = 1.0;
   // Patch centres that move less than this between iterations have
   // converged: a fifth of the precision dense points reach.
   mpgc.convergence_px = 0.02;
@@ -477,9 +482,15 @@ void MatchCell(const MpgcView& master,
     cell->reason = DenseReject::kMpgcBehind;
     return;
   }
+  // The search along the ray in the nearest views only (they are sorted
+  // by viewing direction); which of all the views show the point is asked
+  // at the approximation.
+  const std::vector<MpgcView> nearest(
+      search.begin(),
+      search.begin() + std::min<size_t>(search.size(), options.num_ray_views));
   const EpipolarSearchResult found = SearchMasterRay(master,
                                                      cell->xy,
-                                                     search,
+                                                     nearest,
                                                      min_depth / cosine,
                                                      max_depth / cosine,
                                                      options.search);
@@ -494,10 +505,12 @@ void MatchCell(const MpgcView& master,
   // Views where the approximation does not correlate at all (the point is
   // hidden there, or lit beyond recognition) are left out of MPGC from the
   // start instead of being found and dropped one re-solution at a time.
+  const std::vector<double> view_ncc = ViewCorrelations(
+      master, cell->xy, search, found.xyz, options.search.window_radius);
   std::vector<MpgcView> shown;
   std::vector<int> index;
   for (size_t j = 0; j < search.size(); ++j) {
-    if (found.view_ncc[j] >= options.min_view_ncc) {
+    if (view_ncc[j] >= options.min_view_ncc) {
       shown.push_back(search[j]);
       index.push_back(static_cast<int>(j));
     }

@@ -53,6 +53,9 @@ struct DenseOptions {
   // Explicit masters (image names); overrides num_masters.
   std::vector<std::string> master_names;
   int num_search_images = 6;
+  // The search along the master ray correlates with the nearest this many
+  // search images (the best two of them score each sample).
+  int num_ray_views = 4;
   double max_search_angle_deg = 75;
   // Dense pattern: cell side, pixels; a cell's best Moravec point must
   // reach min_interest (squared grey values, moravec.h).

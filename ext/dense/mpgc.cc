@@ -382,12 +382,40 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   }
   result.distance = distance_of(k);
   result.xyz = origin + result.distance * direction;
-  result.view_ncc.assign(search.size(), -2);
-  for (size_t j = 0; j < search.size(); ++j) {
-    correlate(search[j], result.xyz, &result.view_ncc[j]);
-  }
   result.found = result.ncc >= options.min_ncc;
   return result;
+}
+
+std::vector<double> ViewCorrelations(const MpgcView& master,
+                                     const Eigen::Vector2d& master_xy,
+                                     const std::vector<MpgcView>& views,
+                                     const Eigen::Vector3d& xyz,
+                                     int window_radius) {
+  std::vector<double> correlations(views.size(), -2);
+  const std::optional<MasterRays> rays = RaysOf(master, master_xy);
+  LsmTemplate window;
+  if (!rays || !ExtractLsmTemplate(*master.image,
+                                   master_xy,
+                                   window_radius,
+                                   Interpolation::kBilinear,
+                                   &window)) {
+    return correlations;
+  }
+  for (size_t j = 0; j < views.size(); ++j) {
+    Eigen::Vector2d xy;
+    Eigen::Matrix2d shape;
+    double correlation = 0;
+    if (Project(views[j], xyz, &xy) &&
+        InducedShape(*rays, views[j], xyz, &shape) &&
+        LsmCorrelation(window,
+                       *views[j].image,
+                       LsmParameters::At(xy, shape),
+                       Interpolation::kBilinear,
+                       &correlation)) {
+      correlations[j] = correlation;
+    }
+  }
+  return correlations;
 }
 
 MpgcResult MatchMpgc(const MpgcView& master,

@@ -136,9 +136,6 @@ struct EpipolarSearchResult {
   double second_ncc = -2;
   int num_views = 0;
   int num_samples = 0;
-  // Per search view, its correlation at `xyz` (-2 where it projects
-  // outside): which views show the point at all.
-  std::vector<double> view_ncc;
 };
 
 EpipolarSearchResult SearchMasterRay(const MpgcView& master,
@@ -147,6 +144,16 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
                                      double min_distance,
                                      double max_distance,
                                      const EpipolarSearchOptions& options);
+
+// Per view, the correlation of the master window (2 window_radius + 1
+// square) at `master_xy` with that view's window around the projection of
+// `xyz`, shaped as in SearchMasterRay; -2 where it projects outside: which
+// views show the point at all.
+std::vector<double> ViewCorrelations(const MpgcView& master,
+                                     const Eigen::Vector2d& master_xy,
+                                     const std::vector<MpgcView>& views,
+                                     const Eigen::Vector3d& xyz,
+                                     int window_radius);
 
 // Matches the master pixel `master_xy` into the search views, starting from
 // the object point `approximation` (e.g. from correlation along the

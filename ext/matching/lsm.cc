@@ -142,16 +142,20 @@ bool LsmCorrelation(const LsmTemplate& patch,
   int k = 0;
   for (int v = -r; v <= r; ++v) {
     for (int u = -r; u <= r; ++u, ++k) {
-      ImageSample sample;
-      if (!SampleImage(search,
-                       a(0, 2) + a(0, 0) * u + a(0, 1) * v,
-                       a(1, 2) + a(1, 0) * u + a(1, 1) * v,
-                       interpolation,
-                       &sample)) {
-        return false;
+      const double x = a(0, 2) + a(0, 0) * u + a(0, 1) * v;
+      const double y = a(1, 2) + a(1, 0) * u + a(1, 1) * v;
+      // Values only: no gradients to interpolate (the search along a ray
+      // calls this for every sample and view).
+      float value = 0;
+      if (interpolation == Interpolation::kBilinear) {
+        if (!SampleBilinear(search, x, y, &value)) return false;
+      } else {
+        ImageSample sample;
+        if (!SampleImage(search, x, y, interpolation, &sample)) return false;
+        value = sample.value;
       }
       const double f = patch.values[k];
-      const double g = sample.value;
+      const double g = value;
       sum_f += f;
       sum_g += g;
       sum_ff += f * f;
