@@ -115,6 +115,8 @@ const char* DenseRejectName(DenseReject reason) {
       return "off_surface";
     case DenseReject::kIsolated:
       return "isolated";
+    case DenseReject::kInconsistent:
+      return "inconsistent";
     case DenseReject::kNumReasons:
       break;
   }
@@ -648,6 +650,79 @@ Eigen::Matrix<uint8_t, 3, 1> ColorAt(const cv::Mat& bgr,
   return Eigen::Matrix<uint8_t, 3, 1>(pixel[2], pixel[1], pixel[0]);
 }
 
+// A master's accepted depths on its cell grid (NaN where none).
+struct DepthGrid {
+  MpgcView view;
+  int cols = 0, rows = 0, border = 0, cell_size = 1;
+  std::vector<float> depth;
+};
+
+// The visibility test against the surface the masters found (MPGC's
+// occlusion detection across masters): each point is projected into the
+// other masters; where one has accepted points in the cells around the
+// projection, the point either lies on that surface (support), in front of
+// it (it would hide what that master saw: a conflict), or behind it while
+// matched in that master's image (it cannot have been seen there: a
+// conflict). A point with more conflicts than support is rejected.
+// Tolerance: off_surface_gsd ground sampling distances of that master.
+std::vector<bool> ConsistentWithOtherMasters(
+    const std::vector<Eigen::Vector3d>& points,
+    const std::vector<int>& master_of,
+    const std::vector<std::vector<image_t>>& seen,
+    const std::vector<DepthGrid>& grids,
+    const std::vector<MasterSelection>& masters,
+    const DenseOptions& options) {
+  // One byte per point: threads write their own points (a vector<bool>
+  // packs neighbours into one word).
+  std::vector<char> verdict(points.size(), 1);
+  ParallelFor(static_cast<int>(points.size()), options.num_threads, [&](int i) {
+    int support = 0, conflicts = 0;
+    for (size_t g = 0; g < grids.size(); ++g) {
+      if (static_cast<int>(g) == master_of[i]) continue;
+      const DepthGrid& grid = grids[g];
+      const Eigen::Vector3d in_cam = grid.view.cam_from_world * points[i];
+      Eigen::Vector2d pixel;
+      if (!(in_cam.z() > 0) ||
+          !grid.view.camera->ImgFromCam(in_cam, &pixel, grid.view.frame)) {
+        continue;
+      }
+      const int cx = static_cast<int>(
+          std::floor((pixel.x() - grid.border) / grid.cell_size));
+      const int cy = static_cast<int>(
+          std::floor((pixel.y() - grid.border) / grid.cell_size));
+      float nearest = std::numeric_limits<float>::quiet_NaN();
+      float front = std::numeric_limits<float>::infinity(), back = 0;
+      for (int y = cy - 1; y <= cy + 1; ++y) {
+        for (int x = cx - 1; x <= cx + 1; ++x) {
+          if (x < 0 || y < 0 || x >= grid.cols || y >= grid.rows) continue;
+          const float d = grid.depth[static_cast<size_t>(y) * grid.cols + x];
+          if (!std::isfinite(d)) continue;
+          if (!std::isfinite(nearest) ||
+              std::abs(d - in_cam.z()) < std::abs(nearest - in_cam.z())) {
+            nearest = d;
+          }
+          front = std::min(front, d);
+          back = std::max(back, d);
+        }
+      }
+      if (!std::isfinite(nearest)) continue;
+      const double tolerance = options.off_surface_gsd * in_cam.z() /
+                               grid.view.camera->MeanFocalLengthPx();
+      if (std::abs(nearest - in_cam.z()) <= tolerance) {
+        ++support;
+      } else if (in_cam.z() < front - tolerance) {
+        ++conflicts;
+      } else if (in_cam.z() > back + tolerance &&
+                 std::find(seen[i].begin(), seen[i].end(), masters[g].master) !=
+                     seen[i].end()) {
+        ++conflicts;
+      }
+    }
+    verdict[i] = conflicts <= support;
+  });
+  return std::vector<bool>(verdict.begin(), verdict.end());
+}
+
 }  // namespace
 
 PointCloud DenseReconstruct(const Scene& scene,
@@ -689,6 +764,11 @@ PointCloud DenseReconstruct(const Scene& scene,
   }
   Progress progress("dense", total_cells, "points");
 
+  // Each master's accepted depths on its cell grid, for the test of every
+  // point against the other masters' surfaces at the end.
+  std::vector<DepthGrid> grids(masters.size());
+  std::vector<std::vector<image_t>> seen;  // per point: its images
+  std::vector<int> master_of;              // per point: index into masters
   PointCloud cloud;
   std::vector<double> sx, sy, sz, s_normal, num_images, master_ids, sigma0,
       correlation;
@@ -772,6 +852,18 @@ PointCloud DenseReconstruct(const Scene& scene,
       if (verdict != DenseReject::kAccepted) verdicts.push_back({i, verdict});
     }
     for (const auto& [i, verdict] : verdicts) cells[i].reason = verdict;
+    DepthGrid& grid = grids[m];
+    grid.view = master;
+    grid.cols = cols;
+    grid.rows = rows;
+    grid.border = border;
+    grid.cell_size = options.cell_size;
+    grid.depth.assign(cells.size(), std::numeric_limits<float>::quiet_NaN());
+    for (size_t i = 0; i < cells.size(); ++i) {
+      if (cells[i].reason == DenseReject::kAccepted) {
+        grid.depth[i] = static_cast<float>(cells[i].depth);
+      }
+    }
 
     DenseMasterReport master_report;
     master_report.master = selection.master;
@@ -810,11 +902,12 @@ PointCloud DenseReconstruct(const Scene& scene,
                                             0.0) /
                             std::max<size_t>(1, result.correlation.size()));
       sigmas.push_back(cell.sigma_gsd);
-      if (visibility != nullptr) {
-        std::vector<image_t> seen = {selection.master};
-        for (int view : result.views) seen.push_back(selection.search[view]);
-        visibility->push_back(std::move(seen));
+      std::vector<image_t>& images_of_point = seen.emplace_back();
+      images_of_point.push_back(selection.master);
+      for (int view : result.views) {
+        images_of_point.push_back(selection.search[view]);
       }
+      master_of.push_back(static_cast<int>(m));
     }
     master_report.num_points =
         master_report.rejects[static_cast<int>(DenseReject::kAccepted)];
@@ -826,6 +919,8 @@ PointCloud DenseReconstruct(const Scene& scene,
     work[m].cells = std::vector<Cell>();  // bounded memory: one master's cells
   }
   progress.Finish();
+  const std::vector<bool> keep = ConsistentWithOtherMasters(
+      cloud.positions, master_of, seen, grids, masters, options);
   cloud.AddAttribute("sx", PlyScalarType::kFloat).values = std::move(sx);
   cloud.AddAttribute("sy", PlyScalarType::kFloat).values = std::move(sy);
   cloud.AddAttribute("sz", PlyScalarType::kFloat).values = std::move(sz);
@@ -839,6 +934,20 @@ PointCloud DenseReconstruct(const Scene& scene,
       std::move(sigma0);
   cloud.AddAttribute("correlation", PlyScalarType::kFloat).values =
       std::move(correlation);
+  for (size_t i = 0; i < keep.size(); ++i) {
+    if (keep[i]) continue;
+    DenseMasterReport& master = report->masters[master_of[i]];
+    --master.rejects[static_cast<int>(DenseReject::kAccepted)];
+    ++master.rejects[static_cast<int>(DenseReject::kInconsistent)];
+    --master.num_points;
+    --report->num_points;
+  }
+  cloud.Filter(keep);
+  if (visibility != nullptr) {
+    for (size_t i = 0; i < seen.size(); ++i) {
+      if (keep[i]) visibility->push_back(std::move(seen[i]));
+    }
+  }
   report->seconds = total_timer.Seconds();
   return cloud;
 }

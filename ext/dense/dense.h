@@ -26,6 +26,9 @@
 //    Then every point is tested against the plane of its neighbours in the
 //    master's cell grid (inverse depth over the pixel coordinates, fitted
 //    robustly); those off it are rejected as blunders.
+//    Last, every point is tested against the other masters' surfaces
+//    (visibility: a point may not hide what another master saw, nor be
+//    matched in a master whose surface hides it).
 // 5. Normals from the accepted neighbours in the master's cell grid (a
 //    plane through them, facing the master), colours from the master.
 //
@@ -123,9 +126,11 @@ enum class DenseReject {
   kMpgcTooFewViews,
   kMpgcNotConverged,
   kMpgcSingular,
-  kImprecise,   // sigma along the ray above max_sigma_gsd
-  kOffSurface,  // off the plane of its neighbours
-  kIsolated,    // too few accepted neighbours to confirm it
+  kImprecise,     // sigma along the ray above max_sigma_gsd
+  kOffSurface,    // off the plane of its neighbours
+  kIsolated,      // too few accepted neighbours to confirm it
+  kInconsistent,  // in front of another master's surface, or behind it
+                  // though matched in that master
   kNumReasons
 };
 const char* DenseRejectName(DenseReject reason);
