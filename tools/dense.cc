@@ -194,7 +194,7 @@ int RunDense(int argc, char** argv) {
   app.add_option("--off_surface_gsd",
                  options.off_surface_gsd,
                  "Reject points off the plane of their neighbours by more "
-                 "than this many GSDs (and 3 sigma)");
+                 "than this many GSDs");
   app.add_option("--min_neighbors",
                  options.min_neighbors,
                  "Reject points with fewer accepted neighbours (isolated)");

@@ -538,8 +538,8 @@ void MatchCell(const MpgcView& master,
 // neighbours (within `radius` cells): inverse depth, linear in the master's
 // pixel coordinates over a plane, fitted to the neighbours (with five or
 // more, once more without those off by more than three robust sigmas); the
-// cell is off when it misses the fit by more than max(3 sigma along its
-// ray, off_surface_gsd ground sampling distances). A cell with fewer than
+// cell is off when it misses the fit by more than off_surface_gsd ground
+// sampling distances. A cell with fewer than
 // min_neighbors accepted neighbours is isolated: nothing confirms it, and
 // the blunders that MPGC lets through are mostly such (on the rendered
 // tower, most of those beyond 20 GSD).
@@ -598,9 +598,8 @@ DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
   if (!(predicted > 0)) return DenseReject::kAccepted;
   const double miss = std::abs(1 / predicted - own.depth);
   const double gsd = own.depth * gsd_per_depth;
-  return miss > std::max(3 * own.sigma_gsd * gsd, options.off_surface_gsd * gsd)
-             ? DenseReject::kOffSurface
-             : DenseReject::kAccepted;
+  return miss > options.off_surface_gsd * gsd ? DenseReject::kOffSurface
+                                              : DenseReject::kAccepted;
 }
 
 // The unit normal of the plane through the accepted points of the cells
@@ -934,6 +933,7 @@ PointCloud DenseReconstruct(const Scene& scene,
       std::move(sigma0);
   cloud.AddAttribute("correlation", PlyScalarType::kFloat).values =
       std::move(correlation);
+
   for (size_t i = 0; i < keep.size(); ++i) {
     if (keep[i]) continue;
     DenseMasterReport& master = report->masters[master_of[i]];

@@ -92,8 +92,8 @@ struct DenseOptions {
   MpgcOptions mpgc;
   double max_sigma_gsd = 2.0;
   // Off-surface test: a point whose depth misses the plane of its
-  // neighbours within surface_radius_cells by more than
-  // max(3 sigma, off_surface_gsd GSDs) is a blunder.
+  // neighbours within surface_radius_cells by more than off_surface_gsd
+  // GSDs is a blunder.
   int surface_radius_cells = 2;
   double off_surface_gsd = 3.0;
   // Fewer accepted neighbours within surface_radius_cells: isolated.

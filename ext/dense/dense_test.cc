@@ -164,7 +164,7 @@ TEST(Dense, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
       facing,
       cloud.size());
   EXPECT_LT(rms_gsd, 0.1);
-  // The depth errors are half the reported sz here (0.53 when measured):
+  // The depth errors are half the reported sz here (0.50 when measured):
   // the standard deviations are pessimistic on this exact rendering, never
   // optimistic.
   EXPECT_GT(normalised, 0.4);

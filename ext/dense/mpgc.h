@@ -19,9 +19,11 @@
 //     P_m(X) - x_m = 0.
 // The projections P use the full camera model (distortion, the image's
 // interior orientation), so X comes out of the adjustment directly, with
-// its covariance sigma0^2 (N^-1)_XX. The shifts are always estimated (the
-// geometry determines what the texture leaves open: the point of MPGC);
-// shape and radiometry follow lsm.h's adaptive selection per patch.
+// its covariance sigma0^2 (N^-1)_XX, inflated where the grey residuals are
+// correlated (smooth residual fields carry fewer independent observations). The
+// shifts are always estimated (the geometry determines what the texture leaves
+// open: the point of MPGC); shape and radiometry follow lsm.h's adaptive
+// selection per patch.
 //
 // Blunders and occlusions: a search image whose patch leaves the image,
 // moves more than max_shift_px from its approximation, or whose correlation
@@ -90,6 +92,9 @@ struct MpgcResult {
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // object units^2
   double sigma0 = 0;  // a posteriori, grey values
+  // Lag-one autocorrelations of the grey residuals along the patch rows and
+  // columns; the covariance is inflated by them (mpgc.cc).
+  double residual_rho_u = 0, residual_rho_v = 0;
   int iterations = 0;
   int redundancy = 0;
   // The search views (indices into the `search` argument) in the final
