@@ -368,27 +368,35 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   };
   // The master window against one view at an object point; false where
   // the point projects outside it.
-  const auto correlate = [&](const MpgcView& view,
-                             const Eigen::Vector3d& xyz,
-                             double* correlation) {
-    Eigen::Vector2d xy;
-    Eigen::Matrix2d shape;
-    return Project(view, xyz, &xy) && InducedShape(*rays, view, xyz, &shape) &&
-           LsmCorrelation(window,
-                          *view.image,
-                          LsmParameters::At(xy, shape),
-                          Interpolation::kBilinear,
-                          correlation);
-  };
+  // The windows' shapes change slowly along the ray: each view's is taken
+  // at the middle of the searched segment (two projections per view, not
+  // per sample).
+  const Eigen::Vector3d middle =
+      origin + distance_of(0.5 * (n - 1)) * direction;
+  std::vector<Eigen::Matrix2d> shapes(search.size());
+  std::vector<bool> shaped(search.size(), false);
+  for (size_t j = 0; j < search.size(); ++j) {
+    shaped[j] = InducedShape(*rays, search[j], middle, &shapes[j]);
+  }
+  const auto correlate =
+      [&](size_t j, const Eigen::Vector3d& xyz, double* correlation) {
+        Eigen::Vector2d xy;
+        return shaped[j] && Project(search[j], xyz, &xy) &&
+               LsmCorrelation(window,
+                              *search[j].image,
+                              LsmParameters::At(xy, shapes[j]),
+                              Interpolation::kBilinear,
+                              correlation);
+      };
   std::vector<double> score(n, -2);
   std::vector<int> views(n, 0);
   std::vector<double> correlations;
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector3d xyz = origin + distance_of(k) * direction;
     correlations.clear();
-    for (const MpgcView& view : search) {
+    for (size_t j = 0; j < search.size(); ++j) {
       double correlation = 0;
-      if (correlate(view, xyz, &correlation)) {
+      if (correlate(j, xyz, &correlation)) {
         correlations.push_back(correlation);
       }
     }
