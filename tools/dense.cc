@@ -26,7 +26,8 @@ nlohmann::ordered_json ReportToJson(const DenseReport& report,
   json["num_points"] = report.num_points;
   json["num_cells"] = report.num_cells;
   json["seconds"] = report.seconds;
-  json["cells_per_second"] = report.PointsPerSecond();
+  json["cells_per_second"] = report.CellsPerSecond();
+  json["points_per_second"] = report.PointsPerSecond();
   json["cell_size"] = options.cell_size;
   json["masters"] = nlohmann::ordered_json::array();
   for (const DenseMasterReport& master : report.masters) {

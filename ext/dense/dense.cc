@@ -982,7 +982,7 @@ std::string DenseReport::Summary() const {
   out.precision(1);
   out << seconds << " s (";
   out.precision(0);
-  out << PointsPerSecond() << " cells/s)";
+  out << CellsPerSecond() << " cells/s, " << PointsPerSecond() << " points/s)";
   return out.str();
 }
 

@@ -152,8 +152,13 @@ struct DenseReport {
   size_t num_points = 0;
   size_t num_cells = 0;
   double seconds = 0;
-  double PointsPerSecond() const {
+  // Rates over the whole run: cells tried (every one of the pattern) and
+  // points accepted.
+  double CellsPerSecond() const {
     return seconds > 0 ? num_cells / seconds : 0;
+  }
+  double PointsPerSecond() const {
+    return seconds > 0 ? num_points / seconds : 0;
   }
   std::string Summary() const;
 };
