@@ -761,7 +761,7 @@ PointCloud DenseReconstruct(const Scene& scene,
                                  &work[m].rows);
     total_cells += work[m].cells.size();
   }
-  Progress progress("dense", total_cells, "points");
+  Progress progress("dense", total_cells, "cells");
 
   // Each master's accepted depths on its cell grid, for the test of every
   // point against the other masters' surfaces at the end.
