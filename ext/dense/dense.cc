@@ -434,6 +434,16 @@ class SparseDepths {
   std::vector<std::vector<int>> buckets_;
 };
 
+// The cells of a master's dense pattern: whole cells inside the border.
+void PatternSize(const cv::Mat& gray,
+                 const DenseOptions& options,
+                 int border,
+                 int* cols,
+                 int* rows) {
+  *cols = std::max(0, (gray.cols - 2 * border) / options.cell_size);
+  *rows = std::max(0, (gray.rows - 2 * border) / options.cell_size);
+}
+
 // The master's dense pattern: per cell the strongest Moravec point.
 std::vector<Cell> DensePattern(const cv::Mat& gray,
                                const DenseOptions& options,
@@ -442,8 +452,7 @@ std::vector<Cell> DensePattern(const cv::Mat& gray,
                                int* rows) {
   const cv::Mat interest = MoravecInterest(gray, options.moravec_window);
   const int size = options.cell_size;
-  *cols = std::max(0, (gray.cols - 2 * border) / size);
-  *rows = std::max(0, (gray.rows - 2 * border) / size);
+  PatternSize(gray, options, border, cols, rows);
   std::vector<Cell> cells(static_cast<size_t>(*cols) * *rows);
   for (int cy = 0; cy < *rows; ++cy) {
     for (int cx = 0; cx < *cols; ++cx) {
@@ -534,6 +543,26 @@ void MatchCell(const MpgcView& master,
   cell->depth = depth;
 }
 
+// Calls fn(cell) for the accepted cells within `radius` cells of `index`
+// (the square around it, the cell itself included).
+template <typename Fn>
+void ForEachAcceptedAround(const std::vector<Cell>& cells,
+                           int cols,
+                           int rows,
+                           int index,
+                           int radius,
+                           Fn fn) {
+  const int cx = index % cols, cy = index / cols;
+  for (int y = std::max(0, cy - radius); y <= std::min(rows - 1, cy + radius);
+       ++y) {
+    for (int x = std::max(0, cx - radius); x <= std::min(cols - 1, cx + radius);
+         ++x) {
+      const Cell& cell = cells[static_cast<size_t>(y) * cols + x];
+      if (cell.reason == DenseReject::kAccepted) fn(cell);
+    }
+  }
+}
+
 // Whether an accepted cell's depth agrees with the surface of its accepted
 // neighbours (within `radius` cells): inverse depth, linear in the master's
 // pixel coordinates over a plane, fitted to the neighbours (with five or
@@ -549,20 +578,19 @@ DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
                            int index,
                            const DenseOptions& options,
                            double gsd_per_depth) {
-  const int radius = options.surface_radius_cells;
-  const int cx = index % cols, cy = index / cols;
   const Cell& own = cells[index];
   std::vector<Eigen::Vector3d> rows_uvw;  // (du, dv, 1/depth)
-  for (int y = std::max(0, cy - radius); y <= std::min(rows - 1, cy + radius);
-       ++y) {
-    for (int x = std::max(0, cx - radius); x <= std::min(cols - 1, cx + radius);
-         ++x) {
-      const Cell& cell = cells[static_cast<size_t>(y) * cols + x];
-      if (&cell == &own || cell.reason != DenseReject::kAccepted) continue;
-      rows_uvw.emplace_back(
-          cell.xy.x() - own.xy.x(), cell.xy.y() - own.xy.y(), 1 / cell.depth);
-    }
-  }
+  ForEachAcceptedAround(cells,
+                        cols,
+                        rows,
+                        index,
+                        options.surface_radius_cells,
+                        [&](const Cell& cell) {
+                          if (&cell == &own) return;
+                          rows_uvw.emplace_back(cell.xy.x() - own.xy.x(),
+                                                cell.xy.y() - own.xy.y(),
+                                                1 / cell.depth);
+                        });
   if (static_cast<int>(rows_uvw.size()) < options.min_neighbors) {
     return DenseReject::kIsolated;
   }
@@ -609,22 +637,14 @@ Eigen::Vector3f CellNormal(const std::vector<Cell>& cells,
                            int rows,
                            int index,
                            const Eigen::Vector3d& centre) {
-  const int cx = index % cols, cy = index / cols;
   const Eigen::Vector3d& own = cells[index].mpgc.xyz;
   Eigen::Vector3d towards = (centre - own).normalized();
   for (int radius = 1; radius <= 2; ++radius) {
     std::vector<Eigen::Vector3d> points;
-    for (int y = std::max(0, cy - radius); y <= std::min(rows - 1, cy + radius);
-         ++y) {
-      for (int x = std::max(0, cx - radius);
-           x <= std::min(cols - 1, cx + radius);
-           ++x) {
-        const Cell& cell = cells[static_cast<size_t>(y) * cols + x];
-        if (cell.reason == DenseReject::kAccepted) {
+    ForEachAcceptedAround(
+        cells, cols, rows, index, radius, [&](const Cell& cell) {
           points.push_back(cell.mpgc.xyz);
-        }
-      }
-    }
+        });
     if (points.size() < 4) continue;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (const Eigen::Vector3d& p : points) mean += p;
@@ -746,20 +766,14 @@ PointCloud DenseReconstruct(const Scene& scene,
   };
   const int border = options.mpgc.lsm.patch_radius + 2;
 
-  // The patterns first, for one progress display over all masters.
-  struct MasterWork {
-    std::vector<Cell> cells;
-    int cols = 0, rows = 0;
-  };
-  std::vector<MasterWork> work(masters.size());
+  // One progress display over all masters: the cells each pattern will
+  // have follow from the image size.
   size_t total_cells = 0;
-  for (size_t m = 0; m < masters.size(); ++m) {
-    work[m].cells = DensePattern(images.at(masters[m].master).gray,
-                                 options,
-                                 border,
-                                 &work[m].cols,
-                                 &work[m].rows);
-    total_cells += work[m].cells.size();
+  for (const MasterSelection& selection : masters) {
+    const cv::Mat& gray = images.at(selection.master).gray;
+    int cols = 0, rows = 0;
+    PatternSize(gray, options, border, &cols, &rows);
+    total_cells += static_cast<size_t>(cols) * rows;
   }
   Progress progress("dense", total_cells, "cells");
 
@@ -781,8 +795,9 @@ PointCloud DenseReconstruct(const Scene& scene,
     const SparseDepths sparse(scene, master_image, options);
     const double min_depth = sparse.min_depth(), max_depth = sparse.max_depth();
 
-    std::vector<Cell>& cells = work[m].cells;
-    const int cols = work[m].cols, rows = work[m].rows;
+    int cols = 0, rows = 0;
+    std::vector<Cell> cells = DensePattern(
+        images.at(selection.master).gray, options, border, &cols, &rows);
     const int step = options.coarse_step;
     const auto is_coarse = [&](int index) {
       return (index % cols) % step == 0 && (index / cols) % step == 0;
@@ -915,7 +930,6 @@ PointCloud DenseReconstruct(const Scene& scene,
     report->num_points += master_report.num_points;
     report->num_cells += master_report.num_cells;
     report->masters.push_back(std::move(master_report));
-    work[m].cells = std::vector<Cell>();  // bounded memory: one master's cells
   }
   progress.Finish();
   const std::vector<bool> keep = ConsistentWithOtherMasters(
