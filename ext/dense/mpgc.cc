@@ -323,6 +323,44 @@ void ResidualAutocorrelation(const LsmTemplate& patch,
   }
 }
 
+// The master's correlation window at a pixel and the rays that shape the
+// search windows for it; nullopt where either cannot be had.
+struct MasterWindow {
+  MasterRays rays;
+  LsmTemplate window;
+};
+
+std::optional<MasterWindow> WindowOf(const MpgcView& master,
+                                     const Eigen::Vector2d& master_xy,
+                                     int window_radius) {
+  std::optional<MasterWindow> result(std::in_place);
+  const std::optional<MasterRays> rays = RaysOf(master, master_xy);
+  if (!rays || !ExtractLsmTemplate(*master.image,
+                                   master_xy,
+                                   window_radius,
+                                   Interpolation::kBilinear,
+                                   &result->window)) {
+    return std::nullopt;
+  }
+  result->rays = *rays;
+  return result;
+}
+
+// The master window against a view's window of `shape` around the
+// projection of `xyz`; false where it projects outside.
+bool CorrelateAt(const LsmTemplate& window,
+                 const MpgcView& view,
+                 const Eigen::Vector3d& xyz,
+                 const Eigen::Matrix2d& shape,
+                 double* correlation) {
+  Eigen::Vector2d xy;
+  return Project(view, xyz, &xy) && LsmCorrelation(window,
+                                                   *view.image,
+                                                   LsmParameters::At(xy, shape),
+                                                   Interpolation::kBilinear,
+                                                   correlation);
+}
+
 }  // namespace
 
 EpipolarSearchResult SearchMasterRay(const MpgcView& master,
@@ -337,17 +375,12 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
               "0 < min_distance < max_distance",
               max_distance);
   EpipolarSearchResult result;
-  const std::optional<MasterRays> rays = RaysOf(master, master_xy);
-  LsmTemplate window;
-  if (!rays || !ExtractLsmTemplate(*master.image,
-                                   master_xy,
-                                   options.window_radius,
-                                   Interpolation::kBilinear,
-                                   &window)) {
-    return result;
-  }
-  const Eigen::Vector3d& origin = rays->centre.origin;
-  const Eigen::Vector3d& direction = rays->centre.direction;
+  const std::optional<MasterWindow> master_window =
+      WindowOf(master, master_xy, options.window_radius);
+  if (!master_window) return result;
+  const MasterRays& rays = master_window->rays;
+  const Eigen::Vector3d& origin = rays.centre.origin;
+  const Eigen::Vector3d& direction = rays.centre.direction;
   // Samples even in inverse distance; as many as the longest epipolar
   // segment needs.
   double longest = 0;
@@ -366,8 +399,6 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
         1 / min_distance + k / (n - 1) * (1 / max_distance - 1 / min_distance);
     return 1 / inverse;
   };
-  // The master window against one view at an object point; false where
-  // the point projects outside it.
   // The windows' shapes change slowly along the ray: each view's is taken
   // at the middle of the searched segment (two projections per view, not
   // per sample).
@@ -376,18 +407,8 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   std::vector<Eigen::Matrix2d> shapes(search.size());
   std::vector<bool> shaped(search.size(), false);
   for (size_t j = 0; j < search.size(); ++j) {
-    shaped[j] = InducedShape(*rays, search[j], middle, &shapes[j]);
+    shaped[j] = InducedShape(rays, search[j], middle, &shapes[j]);
   }
-  const auto correlate =
-      [&](size_t j, const Eigen::Vector3d& xyz, double* correlation) {
-        Eigen::Vector2d xy;
-        return shaped[j] && Project(search[j], xyz, &xy) &&
-               LsmCorrelation(window,
-                              *search[j].image,
-                              LsmParameters::At(xy, shapes[j]),
-                              Interpolation::kBilinear,
-                              correlation);
-      };
   std::vector<double> score(n, -2);
   std::vector<int> views(n, 0);
   std::vector<double> correlations;
@@ -396,7 +417,9 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
     correlations.clear();
     for (size_t j = 0; j < search.size(); ++j) {
       double correlation = 0;
-      if (correlate(j, xyz, &correlation)) {
+      if (shaped[j] &&
+          CorrelateAt(
+              master_window->window, search[j], xyz, shapes[j], &correlation)) {
         correlations.push_back(correlation);
       }
     }
@@ -448,27 +471,15 @@ std::vector<double> ViewCorrelations(const MpgcView& master,
                                      const Eigen::Vector3d& xyz,
                                      int window_radius) {
   std::vector<double> correlations(views.size(), -2);
-  const std::optional<MasterRays> rays = RaysOf(master, master_xy);
-  LsmTemplate window;
-  if (!rays || !ExtractLsmTemplate(*master.image,
-                                   master_xy,
-                                   window_radius,
-                                   Interpolation::kBilinear,
-                                   &window)) {
-    return correlations;
-  }
+  const std::optional<MasterWindow> master_window =
+      WindowOf(master, master_xy, window_radius);
+  if (!master_window) return correlations;
   for (size_t j = 0; j < views.size(); ++j) {
-    Eigen::Vector2d xy;
     Eigen::Matrix2d shape;
-    double correlation = 0;
-    if (Project(views[j], xyz, &xy) &&
-        InducedShape(*rays, views[j], xyz, &shape) &&
-        LsmCorrelation(window,
-                       *views[j].image,
-                       LsmParameters::At(xy, shape),
-                       Interpolation::kBilinear,
-                       &correlation)) {
-      correlations[j] = correlation;
+    if (!InducedShape(master_window->rays, views[j], xyz, &shape) ||
+        !CorrelateAt(
+            master_window->window, views[j], xyz, shape, &correlations[j])) {
+      correlations[j] = -2;
     }
   }
   return correlations;
