@@ -62,14 +62,7 @@ Scene ReadOrientedModel(const std::string& input_path,
   }
   if (!database_path.empty()) {
     Database database(database_path, Database::Mode::kReadOnly);
-    if (BayonTableExists(&database, kInteriorTable.name)) {
-      const std::map<image_t, InteriorRecord> interiors =
-          ReadAllInteriors(&database);
-      for (auto& [image_id, image] : scene.images) {
-        const auto it = interiors.find(image_id);
-        if (it != interiors.end()) image.frame = it->second.frame;
-      }
-    }
+    SetInteriorFrames(&database, &scene);
   }
   return scene;
 }
@@ -78,7 +71,7 @@ Scene ReadOrientedModel(const std::string& input_path,
 
 int RunDense(int argc, char** argv) {
   std::string workspace_path, image_path, input_path, database_path;
-  std::string output_path, fused_path, report_path, log_path, master_names;
+  std::string output_path, fused_path, report_path, log_path;
   bool overwrite = false;
   DenseOptions options;
   CommandLine command(
@@ -115,9 +108,10 @@ int RunDense(int argc, char** argv) {
                  "sigma, px (0 = off): different light between photographs");
   app.add_option("--num_masters", options.num_masters, "Master images");
   app.add_option("--master_names",
-                 master_names,
+                 options.master_names,
                  "Master images by name, comma-separated (overrides "
-                 "--num_masters)");
+                 "--num_masters)")
+      ->delimiter(',');
   app.add_option("--num_search_images",
                  options.num_search_images,
                  "Search images per master (nearest viewing directions)");
@@ -220,12 +214,6 @@ int RunDense(int argc, char** argv) {
     ThrowInputError(
         "give --workspace_path, or --image_path, --input_path and "
         "--output_path");
-  }
-  if (!master_names.empty()) {
-    std::stringstream names(master_names);
-    for (std::string name; std::getline(names, name, ',');) {
-      if (!name.empty()) options.master_names.push_back(name);
-    }
   }
   options.Check();
   CheckDirectoryExists(image_path, "--image_path");

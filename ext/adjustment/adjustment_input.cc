@@ -303,12 +303,8 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
   const std::map<camera_t, Camera> beside =
       ReadCalibrationsBesideModel(input_path);
   std::map<camera_t, CalibrationRecord> calibrations;
-  std::map<image_t, InteriorRecord> interiors;
   if (BayonTableExists(&database, kCalibrationTable.name)) {
     calibrations = ReadAllCalibrations(&database);
-  }
-  if (BayonTableExists(&database, kInteriorTable.name)) {
-    interiors = ReadAllInteriors(&database);
   }
 
   // The cameras the block adjusts.
@@ -357,12 +353,7 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
   }
   // Interior orientations of scanned film frames (digital images use the
   // camera's default frame).
-  for (auto& [image_id, image] : block_scene.images) {
-    const std::optional<DatabaseImage> row =
-        database.ReadImageWithName(image.name);
-    auto interior = interiors.find(row->image_id);
-    if (interior != interiors.end()) image.frame = interior->second.frame;
-  }
+  SetInteriorFrames(&database, &block_scene);
 
   input.block = BlockFromScene(block_scene, options.image_sigma_px);
   for (BlockObservation& observation : input.block.observations) {

@@ -286,4 +286,17 @@ std::map<image_t, InteriorRecord> ReadAllInteriors(Database* database) {
   return records;
 }
 
+void SetInteriorFrames(Database* database, Scene* scene) {
+  const std::map<image_t, InteriorRecord> interiors =
+      ReadAllInteriors(database);
+  if (interiors.empty()) return;
+  for (auto& [image_id, image] : scene->images) {
+    const std::optional<DatabaseImage> row =
+        database->ReadImageWithName(image.name);
+    if (!row) continue;
+    const auto interior = interiors.find(row->image_id);
+    if (interior != interiors.end()) image.frame = interior->second.frame;
+  }
+}
+
 }  // namespace bayon

@@ -14,6 +14,7 @@
 #include "ext/colmap/database.h"
 #include "ext/core/camera.h"
 #include "ext/core/image_frame.h"
+#include "ext/core/scene.h"
 
 #include <map>
 #include <optional>
@@ -85,5 +86,9 @@ void WriteInterior(Database* database,
 std::optional<InteriorRecord> ReadInterior(Database* database,
                                            image_t image_id);
 std::map<image_t, InteriorRecord> ReadAllInteriors(Database* database);
+// Gives each image of `scene` that has an interior orientation in the
+// database (matched by name: a model's ids need not be the database's) its
+// frame; the others keep theirs (digital images: the camera's default).
+void SetInteriorFrames(Database* database, Scene* scene);
 
 }  // namespace bayon
