@@ -294,16 +294,16 @@ std::map<image_t, DenseImage> LoadDenseImages(
                         " x ",
                         camera.height);
       }
-    }
-    if (highpass_sigma_px > 0) {
-      // Shading and exposure change slowly across the image; texture does
-      // not. What the photographs' different light leaves of a patch is
-      // then mostly its texture, which least-squares matching's linear
-      // radiometric terms can follow (the paper's high-pass pre-processing
-      // for texture, sec. 3.5, applied here to the matching).
-      cv::Mat blurred;
-      cv::GaussianBlur(image.gray, blurred, cv::Size(), highpass_sigma_px);
-      image.gray = image.gray - blurred + 128.0f;
+      if (highpass_sigma_px > 0) {
+        // Shading and exposure change slowly across the image; texture does
+        // not. What the photographs' different light leaves of a patch is
+        // then mostly its texture, which least-squares matching's linear
+        // radiometric terms can follow (the paper's high-pass pre-processing
+        // for texture, sec. 3.5, applied here to the matching).
+        cv::Mat blurred;
+        cv::GaussianBlur(image.gray, blurred, cv::Size(), highpass_sigma_px);
+        image.gray = image.gray - blurred + 128.0f;
+      }
     }
     if (color && image.color.empty()) {
       image.color = ReadImage(path, ImageReadMode::kColor);

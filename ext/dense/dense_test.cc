@@ -3,11 +3,13 @@
 
 #include "ext/core/errors.h"
 #include "ext/dense/plane_scene_testing.h"
+#include "ext/image/image_io.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <set>
 
 namespace bayon {
@@ -170,6 +172,31 @@ TEST(Dense, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
   EXPECT_GT(normalised, 0.4);
   EXPECT_LT(normalised, 1.5);
   EXPECT_GE(facing, 0.95 * cloud.size());
+}
+
+// An image that two masters need is read and high-passed once: the grey
+// values every master sees are the same filtered image.
+TEST(Dense, ImagesAreFilteredOnce) {
+  const PlaneScene plane(2.0);
+  const Scene scene = plane.ToScene();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / "bayon_dense_images").string();
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  for (size_t j = 0; j < plane.images.size(); ++j) {
+    cv::Mat bytes;
+    plane.images[j].convertTo(bytes, CV_8U);
+    WriteImage(dir + "/image_" + std::to_string(j + 1) + ".png", bytes);
+  }
+  const std::map<image_t, DenseImage> once =
+      LoadDenseImages(scene, {{1, {2}}}, dir, 3.0);
+  const std::map<image_t, DenseImage> shared =
+      LoadDenseImages(scene, {{1, {2}}, {2, {1}}, {3, {1, 2}}}, dir, 3.0);
+  for (image_t id : {1, 2}) {
+    EXPECT_EQ(cv::norm(once.at(id).gray, shared.at(id).gray, cv::NORM_INF), 0)
+        << "image " << id;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
