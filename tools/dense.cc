@@ -8,6 +8,7 @@
 #include "ext/colmap/ply_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/image/image_io.h"
 #include "tools/command.h"
 #include "tools/commands.h"
 
@@ -274,8 +275,16 @@ int RunDense(int argc, char** argv) {
   WriteColmapFusedPly(cloud, fused_path, "bayon dense", &visibility);
   WriteFileAtomically(report_path,
                       ReportToJson(report, options).dump(2) + "\n");
+  // A picture per master of what became of its cells.
+  const fs::path rejects_folder = output_folder / "rejects";
+  fs::create_directories(rejects_folder);
+  for (const DenseMasterReport& master : report.masters) {
+    WriteImage(
+        (rejects_folder / fs::path(master.name).stem()).string() + ".png",
+        RejectMap(master, images.at(master.master).color));
+  }
   command.PrintSummary(report.Summary() + "\n  -> " + output_path + ", " +
-                       fused_path);
+                       fused_path + ", " + rejects_folder.string() + "/");
   return 0;
 }
 

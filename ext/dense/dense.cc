@@ -572,31 +572,15 @@ void ForEachAcceptedAround(const std::vector<Cell>& cells,
 // min_neighbors accepted neighbours is isolated: nothing confirms it, and
 // the blunders that MPGC lets through are mostly such (on the rendered
 // tower, most of those beyond 20 GSD).
-DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
-                           int cols,
-                           int rows,
-                           int index,
-                           const DenseOptions& options,
-                           double gsd_per_depth) {
-  const Cell& own = cells[index];
-  std::vector<Eigen::Vector3d> rows_uvw;  // (du, dv, 1/depth)
-  ForEachAcceptedAround(cells,
-                        cols,
-                        rows,
-                        index,
-                        options.surface_radius_cells,
-                        [&](const Cell& cell) {
-                          if (&cell == &own) return;
-                          rows_uvw.emplace_back(cell.xy.x() - own.xy.x(),
-                                                cell.xy.y() - own.xy.y(),
-                                                1 / cell.depth);
-                        });
-  if (static_cast<int>(rows_uvw.size()) < options.min_neighbors) {
-    return DenseReject::kIsolated;
-  }
-  std::vector<bool> use(rows_uvw.size(), true);
+// How far (in depth) a cell misses the plane of inverse depth, linear in
+// the master's pixel coordinates, fitted to the chosen neighbours' rows
+// (du, dv, 1/depth) (with five or more, once more without those off by
+// more than three robust sigmas); 0 where the plane is undetermined.
+double SurfaceMiss(const std::vector<Eigen::Vector3d>& rows_uvw,
+                   std::vector<bool> use,
+                   const Cell& own) {
   double predicted = 0;
-  const int passes = rows_uvw.size() >= 5 ? 2 : 1;
+  const int passes = std::count(use.begin(), use.end(), true) >= 5 ? 2 : 1;
   for (int pass = 0; pass < passes; ++pass) {
     Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
@@ -607,27 +591,77 @@ DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
       b += a * rows_uvw[k].z();
     }
     const Eigen::Vector3d plane = N.ldlt().solve(b);
-    if (!plane.allFinite()) return DenseReject::kAccepted;
+    if (!plane.allFinite()) return 0;
     predicted = plane(0);
     if (pass + 1 == passes) break;
     std::vector<double> residuals;
-    for (const Eigen::Vector3d& r : rows_uvw) {
+    for (size_t k = 0; k < rows_uvw.size(); ++k) {
+      if (!use[k]) continue;
+      const Eigen::Vector3d& r = rows_uvw[k];
       residuals.push_back(
           std::abs(plane(0) + plane(1) * r.x() + plane(2) * r.y() - r.z()));
     }
     const double limit = 3 * 1.4826 * Median(residuals);
+    std::vector<bool> kept_use(use.size(), false);
     int kept = 0;
     for (size_t k = 0; k < rows_uvw.size(); ++k) {
-      use[k] = residuals[k] <= limit;
-      kept += use[k];
+      if (!use[k]) continue;
+      const Eigen::Vector3d& r = rows_uvw[k];
+      kept_use[k] = std::abs(plane(0) + plane(1) * r.x() + plane(2) * r.y() -
+                             r.z()) <= limit;
+      kept += kept_use[k];
     }
     if (kept < 3) break;
+    use = std::move(kept_use);
   }
-  if (!(predicted > 0)) return DenseReject::kAccepted;
-  const double miss = std::abs(1 / predicted - own.depth);
-  const double gsd = own.depth * gsd_per_depth;
-  return miss > options.off_surface_gsd * gsd ? DenseReject::kOffSurface
-                                              : DenseReject::kAccepted;
+  if (!(predicted > 0)) return 0;
+  return std::abs(1 / predicted - own.depth);
+}
+
+DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
+                           int cols,
+                           int rows,
+                           int index,
+                           const DenseOptions& options,
+                           double gsd_per_depth) {
+  const Cell& own = cells[index];
+  const double tolerance = options.off_surface_gsd * own.depth * gsd_per_depth;
+  std::vector<Eigen::Vector3d> rows_uvw;  // (du, dv, 1/depth)
+  std::vector<double> miss;               // |depth - own depth| / (1 + cells)
+  ForEachAcceptedAround(cells,
+                        cols,
+                        rows,
+                        index,
+                        options.surface_radius_cells,
+                        [&](const Cell& cell) {
+                          if (&cell == &own) return;
+                          const Eigen::Vector2d d = cell.xy - own.xy;
+                          rows_uvw.emplace_back(d.x(), d.y(), 1 / cell.depth);
+                          miss.push_back(std::abs(cell.depth - own.depth) /
+                                         (1 + d.norm() / options.cell_size));
+                        });
+  if (static_cast<int>(rows_uvw.size()) < options.min_neighbors) {
+    return DenseReject::kIsolated;
+  }
+  // The plane of all neighbours, robustly; where the cell lies at a crease
+  // or a step (two surfaces among its neighbours, neither of them a clear
+  // majority), the plane of those neighbours on its own side: near its
+  // depth, allowing for the slope of an oblique surface.
+  if (SurfaceMiss(rows_uvw, std::vector<bool>(rows_uvw.size(), true), own) <=
+      tolerance) {
+    return DenseReject::kAccepted;
+  }
+  std::vector<bool> near(rows_uvw.size());
+  int num_near = 0;
+  for (size_t k = 0; k < miss.size(); ++k) {
+    near[k] = miss[k] <= tolerance;
+    num_near += near[k];
+  }
+  if (num_near >= std::max(5, options.min_neighbors) &&
+      SurfaceMiss(rows_uvw, near, own) <= tolerance) {
+    return DenseReject::kAccepted;
+  }
+  return DenseReject::kOffSurface;
 }
 
 // The unit normal of the plane through the accepted points of the cells
@@ -782,6 +816,7 @@ PointCloud DenseReconstruct(const Scene& scene,
   std::vector<DepthGrid> grids(masters.size());
   std::vector<std::vector<image_t>> seen;  // per point: its images
   std::vector<int> master_of;              // per point: index into masters
+  std::vector<int> cell_of;                // per point: its master's cell
   PointCloud cloud;
   std::vector<double> sx, sy, sz, s_normal, num_images, master_ids, sigma0,
       correlation;
@@ -886,6 +921,13 @@ PointCloud DenseReconstruct(const Scene& scene,
     master_report.min_depth = min_depth;
     master_report.max_depth = max_depth;
     master_report.num_cells = cells.size();
+    master_report.reasons = cv::Mat(rows, cols, CV_8U);
+    for (size_t i = 0; i < cells.size(); ++i) {
+      master_report.reasons.at<uint8_t>(static_cast<int>(i)) =
+          static_cast<uint8_t>(cells[i].reason);
+    }
+    master_report.border = border;
+    master_report.cell_size = options.cell_size;
     const cv::Mat& color = images.at(selection.master).color;
     const Eigen::Vector3d centre = master_image.cam_from_world.Center();
     std::vector<double> sigmas;
@@ -922,6 +964,7 @@ PointCloud DenseReconstruct(const Scene& scene,
         images_of_point.push_back(selection.search[view]);
       }
       master_of.push_back(static_cast<int>(m));
+      cell_of.push_back(i);
     }
     master_report.num_points =
         master_report.rejects[static_cast<int>(DenseReject::kAccepted)];
@@ -953,6 +996,8 @@ PointCloud DenseReconstruct(const Scene& scene,
     DenseMasterReport& master = report->masters[master_of[i]];
     --master.rejects[static_cast<int>(DenseReject::kAccepted)];
     ++master.rejects[static_cast<int>(DenseReject::kInconsistent)];
+    master.reasons.at<uint8_t>(cell_of[i]) =
+        static_cast<uint8_t>(DenseReject::kInconsistent);
     --master.num_points;
     --report->num_points;
   }
@@ -998,6 +1043,79 @@ std::string DenseReport::Summary() const {
   out.precision(0);
   out << CellsPerSecond() << " cells/s, " << PointsPerSecond() << " points/s)";
   return out.str();
+}
+
+namespace {
+
+// BGR colours of the reasons in RejectMap: green where a point was found,
+// none where there is no texture, cold colours where there was no
+// approximation, warm ones where MPGC or a later test rejected it.
+cv::Scalar ReasonColor(DenseReject reason) {
+  switch (reason) {
+    case DenseReject::kAccepted:
+      return {60, 200, 60};
+    case DenseReject::kNoApproximation:
+      return {200, 90, 30};
+    case DenseReject::kAmbiguous:
+      return {200, 200, 40};
+    case DenseReject::kImprecise:
+      return {40, 220, 240};
+    case DenseReject::kOffSurface:
+      return {220, 60, 220};
+    case DenseReject::kIsolated:
+      return {160, 90, 140};
+    case DenseReject::kInconsistent:
+      return {255, 255, 255};
+    case DenseReject::kNoTexture:
+    case DenseReject::kNumReasons:
+      return {-1, -1, -1};
+    default:  // the MPGC statuses
+      return {40, 40, 230};
+  }
+}
+
+}  // namespace
+
+cv::Mat RejectMap(const DenseMasterReport& master, const cv::Mat& color) {
+  cv::Mat picture;
+  color.convertTo(picture, CV_8UC3, 0.5);  // dimmed: the cells stand out
+  const int size = master.cell_size;
+  for (int cy = 0; cy < master.reasons.rows; ++cy) {
+    for (int cx = 0; cx < master.reasons.cols; ++cx) {
+      const cv::Scalar c = ReasonColor(
+          static_cast<DenseReject>(master.reasons.at<uint8_t>(cy, cx)));
+      if (c[0] < 0) continue;
+      const cv::Rect cell(
+          master.border + cx * size, master.border + cy * size, size, size);
+      cv::Mat roi = picture(cell & cv::Rect(0, 0, picture.cols, picture.rows));
+      cv::addWeighted(
+          roi, 0.35, cv::Mat(roi.size(), roi.type(), c), 0.65, 0, roi);
+    }
+  }
+  // Legend: the reasons that occur, with their counts.
+  const double scale = std::max(0.5, picture.cols / 2400.0);
+  const int line = static_cast<int>(std::lround(24 * scale));
+  int y = line;
+  for (int r = 0; r < static_cast<int>(DenseReject::kNumReasons); ++r) {
+    const DenseReject reason = static_cast<DenseReject>(r);
+    if (master.rejects[r] == 0) continue;
+    cv::Scalar c = ReasonColor(reason);
+    if (c[0] < 0) c = {128, 128, 128};
+    cv::rectangle(picture,
+                  cv::Rect(line / 2, y - line + 6, line - 6, line - 6),
+                  c,
+                  cv::FILLED);
+    cv::putText(picture,
+                StrCat(DenseRejectName(reason), " ", master.rejects[r]),
+                cv::Point(line * 3 / 2, y),
+                cv::FONT_HERSHEY_SIMPLEX,
+                0.6 * scale,
+                cv::Scalar(255, 255, 255),
+                std::max(1, static_cast<int>(scale)),
+                cv::LINE_AA);
+    y += line;
+  }
+  return picture;
 }
 
 }  // namespace bayon

@@ -64,7 +64,7 @@ struct DenseOptions {
   // reach min_interest (squared grey values, moravec.h).
   int cell_size = 7;
   int moravec_window = 5;
-  double min_interest = 4.0;
+  double min_interest = 2.0;
   // Approximations: the coarse cells, and how far the band of the other
   // cells reaches beyond the depths of the coarse points around them
   // (a share of the depth), over how many coarse cells around.
@@ -145,7 +145,17 @@ struct DenseMasterReport {
   std::array<size_t, static_cast<int>(DenseReject::kNumReasons)> rejects{};
   double median_sigma_gsd = 0;  // along the ray, master GSDs
   double seconds = 0;
+  // What became of every cell (DenseReject, CV_8U, one element per cell),
+  // and where the cell grid lies in the master: cell (cx, cy) covers pixels
+  // border + cell_size * (cx, cy) onwards.
+  cv::Mat reasons;
+  int border = 0, cell_size = 1;
 };
+
+// A picture of a master's cells (RejectMap colours, the master dimmed
+// underneath) with a legend: where the surface was found, and why not
+// elsewhere.
+cv::Mat RejectMap(const DenseMasterReport& master, const cv::Mat& color);
 
 struct DenseReport {
   std::vector<DenseMasterReport> masters;
