@@ -63,7 +63,8 @@ int RunEdit(int argc, char** argv) {
       "Remove blunders from a dense point cloud without smoothing it: "
       "iterative local second-order surface fitting (Fua and Sander 1992, as "
       "adapted in the Bayon paper, sec. 3.4), weighted by the points' own "
-      "precision (sx, sy, sz); or PCL's statistical / radius outlier removal "
+      "precision (s_normal, or sx, sy, sz); or PCL's statistical / radius "
+      "outlier removal "
       "for comparison. Kept points are written unchanged.");
   CLI::App& app = command.app();
   app.add_option("--input_path", input_path, "Point cloud (PLY)")->required();
@@ -83,9 +84,10 @@ int RunEdit(int argc, char** argv) {
   app.add_option("--max_deviation_m",
                  options.surface_fit.max_deviation_m,
                  "surface_fit: delete beyond this distance, metres (0 = off)");
-  app.add_option("--use_point_precision",
-                 options.surface_fit.use_point_precision,
-                 "surface_fit: 1 = weights and sigma units from sx, sy, sz");
+  app.add_option(
+      "--use_point_precision",
+      options.surface_fit.use_point_precision,
+      "surface_fit: 1 = weights and sigma units from s_normal, or sx, sy, sz");
   app.add_option("--mean_k",
                  options.statistical.mean_k,
                  "statistical: neighbours for the mean distance");

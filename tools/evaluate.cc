@@ -13,6 +13,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/eval/calibration_eval.h"
+#include "ext/eval/cloud_edit_eval.h"
 #include "ext/eval/mesh_distance.h"
 #include "ext/eval/sparse_eval.h"
 #include "ext/eval/surface_eval.h"
@@ -233,7 +234,7 @@ void Transform(const Sim3d& b_from_a, PointCloud* cloud) {
 int RunEvaluate(int argc, char** argv) {
   std::string input_path, ground_truth_path, output_path, label;
   std::string calibration_path, surface_path, cloud_path, mesh_path;
-  std::string cloud_errors_path;
+  std::string cloud_errors_path, edit_input_path;
   std::string textured_mesh_path, texture_path, heldout_path, render_path;
   bool align = true;
   double gsd_m = 0, threshold_m = 0, threshold_gsd = 2;
@@ -260,6 +261,12 @@ int RunEvaluate(int argc, char** argv) {
                  cloud_errors_path,
                  "Write the cloud, in the truth's frame, with each point's "
                  "distance to the true surface (PLY attribute distance_m)");
+  app.add_option("--edit_input_path",
+                 edit_input_path,
+                 "The cloud before `bayon edit`, with blunders flagged "
+                 "(`bayon synth_cloud`); --cloud_path is the edited one: "
+                 "blunders and good points removed, and the RMS of the "
+                 "kept points against the blunder-free input's");
   app.add_option("--mesh_path", mesh_path, "Mesh (PLY) to evaluate");
   app.add_option("--textured_mesh_path",
                  textured_mesh_path,
@@ -300,6 +307,14 @@ int RunEvaluate(int argc, char** argv) {
     ThrowInputError(
         "nothing to evaluate: give --input_path, --cloud_path, "
         "--mesh_path or --textured_mesh_path");
+  }
+  if (!edit_input_path.empty()) {
+    if (cloud_path.empty()) {
+      ThrowInputError(
+          "--edit_input_path needs the edited cloud as "
+          "--cloud_path");
+    }
+    CheckFileExists(edit_input_path, "--edit_input_path");
   }
   const TruthPaths found = FindTruth(ground_truth_path);
   if (surface_path.empty()) surface_path = found.surface;
@@ -358,8 +373,9 @@ int RunEvaluate(int argc, char** argv) {
         !found.ground.empty() && surface_path == found.surface;
     const TriangleMesh ground =
         with_ground ? ReadMeshPly(found.ground) : TriangleMesh();
-    const MeshDistance truth_distance(
-        with_ground ? MergedGeometry({&surface, &ground}) : surface);
+    const TriangleMesh truth_geometry =
+        with_ground ? MergedGeometry({&surface, &ground}) : surface;
+    const MeshDistance truth_distance(truth_geometry);
     if (with_ground) report["accuracy_includes_ground"] = found.ground;
     SurfaceEvaluationOptions options;
     options.gsd_m = gsd_m;
@@ -424,6 +440,25 @@ int RunEvaluate(int argc, char** argv) {
                         .c_str());
         report["cloud"] = SurfaceToJson(e);
         report["cloud"]["path"] = cloud_path;
+        if (!edit_input_path.empty()) {
+          PointCloud before = ReadPointCloudPly(edit_input_path);
+          Transform(truth_from_model, &before);
+          const CloudEditEvaluation edit =
+              EvaluateCloudEdit(before, cloud, truth_geometry, num_threads);
+          std::printf(
+              "\n%s\n%s\n",
+              CloudEditEvaluation::TableHeader().c_str(),
+              edit.Table(fs::path(cloud_path).filename().string()).c_str());
+          report["edit"] = {
+              {"input_path", edit_input_path},
+              {"num_blunders", edit.num_blunders_before},
+              {"blunders_removed", edit.BlundersRemovedFraction()},
+              {"num_good", edit.num_good_before},
+              {"good_removed", edit.GoodRemovedFraction()},
+              {"rms_good_before_m", edit.good_before.rms},
+              {"rms_kept_m", edit.kept_after.rms},
+              {"rms_good_kept_m", edit.good_after.rms}};
+        }
         if (!cloud_errors_path.empty()) {
           // Every point with its distance to the truth, in the truth's
           // frame: where the errors are, to look at.

@@ -429,8 +429,40 @@ void CloudEditOptions::Check() const {
   radius.Check();
 }
 
+namespace {
+
+double CheckedSigma(const PointAttribute& attribute,
+                    size_t i,
+                    const std::string& what) {
+  const double s = attribute.values[i];
+  if (!(s > 0) || !std::isfinite(s)) {
+    ThrowInputError(what,
+                    ": point ",
+                    i,
+                    " has ",
+                    attribute.name,
+                    " = ",
+                    s,
+                    "; standard deviations must be positive and finite");
+  }
+  return s;
+}
+
+}  // namespace
+
 std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
                                          const std::string& what) {
+  // A dense matcher's covariance is long along the viewing ray and leans
+  // with it, so the per-axis sigmas (its diagonal) say little about the
+  // precision across the surface; where the cloud carries that figure
+  // (s_normal, from the full covariance), it stands for all three axes.
+  if (const PointAttribute* s_normal = cloud.FindAttribute("s_normal")) {
+    std::vector<Eigen::Vector3d> sigmas(cloud.size());
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      sigmas[i].setConstant(CheckedSigma(*s_normal, i, what));
+    }
+    return sigmas;
+  }
   const PointAttribute* attributes[3] = {cloud.FindAttribute("sx"),
                                          cloud.FindAttribute("sy"),
                                          cloud.FindAttribute("sz")};
@@ -440,18 +472,7 @@ std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
   std::vector<Eigen::Vector3d> sigmas(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) {
     for (int k = 0; k < 3; ++k) {
-      const double s = attributes[k]->values[i];
-      if (!(s > 0) || !std::isfinite(s)) {
-        ThrowInputError(what,
-                        ": point ",
-                        i,
-                        " has ",
-                        attributes[k]->name,
-                        " = ",
-                        s,
-                        "; standard deviations must be positive and finite");
-      }
-      sigmas[i](k) = s;
+      sigmas[i](k) = CheckedSigma(*attributes[k], i, what);
     }
   }
   return sigmas;
@@ -495,8 +516,9 @@ std::string CloudEditReport::Summary() const {
       << (num_input > 0 ? 100.0 * num_removed / num_input : 0.0) << " %) in "
       << seconds << " s";
   if (method == CloudEditMethod::kSurfaceFit) {
-    out << (used_point_precision ? "; weights and sigma units from sx, sy, sz"
-                                 : "; sigma units from the local scatter");
+    out << (used_point_precision
+                ? "; weights and sigma units from the points' own precision"
+                : "; sigma units from the local scatter");
     out << (converged ? "; converged" : "");
   }
   if (method == CloudEditMethod::kRadius)

@@ -8,7 +8,7 @@
 // in a local frame (local_quadric.h) is fitted to its k nearest neighbours
 // among the points not currently flagged (from its k + 8 nearest, found once
 // with PCL's k-d tree), weighted by the
-// neighbours' own precision (the sx, sy, sz attributes of `bayon dense`) when
+// neighbours' own precision (s_normal, or sx, sy, sz, of `bayon dense`) when
 // the cloud has them. The point is flagged when its deviation from its patch
 // exceeds `max_deviation_sigma` standard deviations of that deviation
 // (its own sigma along the normal, the patch's height uncertainty, and the
@@ -50,7 +50,7 @@ struct SurfaceFitEditOptions {
   double max_deviation_sigma = 3.5;
   // Absolute threshold in metres; 0 = off. With both set, either flags.
   double max_deviation_m = 0;
-  // Weight by and test in units of the points' own precision (sx, sy, sz)
+  // Weight by and test in units of the points' own precision (PointSigmas)
   // when present; otherwise (or when off) the local scatter around each
   // patch is the unit.
   bool use_point_precision = true;
@@ -133,8 +133,10 @@ PointCloud EditPointCloud(const PointCloud& cloud,
                           const std::string& what = "point cloud");
 
 // The per-axis standard deviations sx, sy, sz of every point, or empty when
-// the cloud lacks one of them. Throws InputError naming `what` when one is
-// not a positive finite number.
+// the cloud lacks one of them; where it has s_normal (the standard
+// deviation along the surface normal from a full covariance, as `bayon
+// dense` writes), that for all three axes. Throws InputError naming `what` when
+// one is not a positive finite number.
 std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
                                          const std::string& what);
 

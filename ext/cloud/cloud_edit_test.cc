@@ -183,5 +183,20 @@ TEST(CloudEdit, RefusesBadClouds) {
   EXPECT_THROW(ParseCloudEditMethod("median"), InputError);
 }
 
+// A dense matcher's precision across the surface (s_normal) stands for all
+// three axes where the cloud has it; otherwise sx, sy, sz.
+TEST(CloudEdit, PrecisionAlongTheNormalWhereGiven) {
+  PointCloud cloud;
+  cloud.positions.assign(2, Eigen::Vector3d::Zero());
+  cloud.AddAttribute("sx", PlyScalarType::kFloat, 0.004);
+  cloud.AddAttribute("sy", PlyScalarType::kFloat, 0.005);
+  cloud.AddAttribute("sz", PlyScalarType::kFloat, 0.006);
+  EXPECT_EQ(PointSigmas(cloud, "c")[1], Eigen::Vector3d(0.004, 0.005, 0.006));
+  cloud.AddAttribute("s_normal", PlyScalarType::kFloat, 0.001);
+  EXPECT_EQ(PointSigmas(cloud, "c")[1], Eigen::Vector3d::Constant(0.001));
+  cloud.FindAttribute("s_normal")->values[0] = 0;
+  EXPECT_THROW(PointSigmas(cloud, "c"), InputError);
+}
+
 }  // namespace
 }  // namespace bayon

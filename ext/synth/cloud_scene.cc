@@ -220,6 +220,63 @@ void NoisyCloudOptions::Check() const {
               StrCat(blunder_min_m, "/", blunder_max_m));
 }
 
+namespace {
+
+// Turns round(blunder_fraction * n) of the cloud's points, at random, into
+// blunders: each moved from its place on the surface along the surface
+// normal there, to either side, by a distance uniform in [blunder_min_m,
+// blunder_max_m]. A displacement that lands near another part of the
+// surface (into the wall behind a relief, under a cornice) is no blunder of
+// that size: it is drawn again (up to 20 times) until the point is at least
+// blunder_min_m from the whole surface. Returns the flags (0/1) per point.
+std::vector<double> DisplaceBlunders(
+    const TriangleMesh& surface,
+    const std::vector<Eigen::Vector3d>& on_surface,
+    const std::vector<Eigen::Vector3d>& normals,
+    const NoisyCloudOptions& options,
+    std::mt19937_64* rng,
+    PointCloud* cloud) {
+  const size_t n = cloud->size();
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::shuffle(order.begin(), order.end(), *rng);
+  const size_t num_blunders =
+      static_cast<size_t>(std::llround(options.blunder_fraction * n));
+  std::vector<double> flags(n, 0.0);
+  std::uniform_real_distribution<double> offset(options.blunder_min_m,
+                                                options.blunder_max_m);
+  std::bernoulli_distribution side(0.5);
+  std::unique_ptr<MeshDistance> distance;
+  if (num_blunders > 0 && options.blunder_min_m > 0) {
+    distance = std::make_unique<MeshDistance>(surface);
+  }
+  for (size_t b = 0; b < num_blunders; ++b) {
+    const size_t i = order[b];
+    for (int attempt = 0; attempt < 20; ++attempt) {
+      const double d = offset(*rng) * (side(*rng) ? 1.0 : -1.0);
+      cloud->positions[i] = on_surface[i] + d * normals[i];
+      if (!distance || distance->Closest(cloud->positions[i]).distance >=
+                           options.blunder_min_m) {
+        break;
+      }
+    }
+    flags[i] = 1.0;
+  }
+  return flags;
+}
+
+std::vector<Eigen::Vector3d> SamplePositions(
+    const std::vector<SurfaceSample>& samples) {
+  std::vector<Eigen::Vector3d> positions;
+  positions.reserve(samples.size());
+  for (const SurfaceSample& sample : samples) {
+    positions.push_back(sample.position);
+  }
+  return positions;
+}
+
+}  // namespace
+
 PointCloud SampleNoisyCloud(const TriangleMesh& surface,
                             const NoisyCloudOptions& options) {
   options.Check();
@@ -244,37 +301,8 @@ PointCloud SampleNoisyCloud(const TriangleMesh& surface,
     cloud.positions[i] = samples[i].position + noise;
   }
 
-  // Exactly round(fraction * n) blunders at random indices.
-  std::vector<size_t> order(n);
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::shuffle(order.begin(), order.end(), rng);
-  const size_t num_blunders =
-      static_cast<size_t>(std::llround(options.blunder_fraction * n));
-  std::vector<double> flags(n, 0.0);
-  std::uniform_real_distribution<double> offset(options.blunder_min_m,
-                                                options.blunder_max_m);
-  std::bernoulli_distribution side(0.5);
-  // A displacement that lands near another part of the surface (into the
-  // wall behind a relief, under a cornice) is no blunder of that size: it is
-  // drawn again (up to 20 times) until the point is at least blunder_min_m
-  // from the whole surface.
-  std::unique_ptr<MeshDistance> distance;
-  if (num_blunders > 0 && options.blunder_min_m > 0) {
-    distance = std::make_unique<MeshDistance>(surface);
-  }
-  for (size_t b = 0; b < num_blunders; ++b) {
-    const size_t i = order[b];
-    for (int attempt = 0; attempt < 20; ++attempt) {
-      const double d = offset(rng) * (side(rng) ? 1.0 : -1.0);
-      cloud.positions[i] = samples[i].position + d * normals[i];
-      if (!distance || distance->Closest(cloud.positions[i]).distance >=
-                           options.blunder_min_m) {
-        break;
-      }
-    }
-    flags[i] = 1.0;
-  }
-
+  std::vector<double> flags = DisplaceBlunders(
+      surface, SamplePositions(samples), normals, options, &rng, &cloud);
   if (options.with_normals) {
     cloud.normals.resize(n);
     for (size_t i = 0; i < n; ++i) cloud.normals[i] = normals[i].cast<float>();
@@ -291,6 +319,48 @@ PointCloud SampleNoisyCloud(const TriangleMesh& surface,
     cloud.AddAttribute(kBlunderAttribute, PlyScalarType::kUChar).values = flags;
   }
   return cloud;
+}
+
+size_t InjectBlunders(const TriangleMesh& surface,
+                      const NoisyCloudOptions& options,
+                      PointCloud* cloud) {
+  options.Check();
+  if (cloud->empty()) ThrowInputError("the cloud to add blunders to is empty");
+  const MeshDistance distance(surface);
+  // The candidates: points on the surface (nearer than half the smallest
+  // blunder), each with its closest surface point and that face's normal.
+  std::vector<size_t> candidates;
+  std::vector<Eigen::Vector3d> on_surface, normals;
+  for (size_t i = 0; i < cloud->size(); ++i) {
+    const MeshDistance::Hit hit = distance.Closest(cloud->positions[i]);
+    if (hit.distance > 0.5 * options.blunder_min_m) continue;
+    candidates.push_back(i);
+    on_surface.push_back(hit.closest_point);
+    normals.push_back(FaceNormal(surface, hit.face));
+  }
+  if (candidates.empty()) {
+    ThrowInputError("no point of the cloud lies on the true surface (within ",
+                    0.5 * options.blunder_min_m,
+                    " m): is it in the truth's frame?");
+  }
+  PointCloud subset;
+  for (size_t i : candidates) subset.positions.push_back(cloud->positions[i]);
+  std::mt19937_64 rng(options.seed ^ 0x9e3779b97f4a7c15ULL);
+  NoisyCloudOptions scaled = options;
+  // The share is of the whole cloud.
+  scaled.blunder_fraction = std::min(
+      1.0, options.blunder_fraction * cloud->size() / candidates.size());
+  const std::vector<double> subset_flags =
+      DisplaceBlunders(surface, on_surface, normals, scaled, &rng, &subset);
+  std::vector<double> flags(cloud->size(), 0.0);
+  size_t count = 0;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    cloud->positions[candidates[k]] = subset.positions[k];
+    flags[candidates[k]] = subset_flags[k];
+    count += subset_flags[k] != 0;
+  }
+  cloud->AddAttribute(kBlunderAttribute, PlyScalarType::kUChar).values = flags;
+  return count;
 }
 
 }  // namespace bayon

@@ -83,6 +83,17 @@ struct NoisyCloudOptions {
 PointCloud SampleNoisyCloud(const TriangleMesh& surface,
                             const NoisyCloudOptions& options);
 
+// Blunders injected into an existing cloud (a dense matcher's) whose true
+// surface is known: of the points on the surface (nearer to it than half
+// blunder_min_m), round(blunder_fraction * cloud size) at random are moved
+// along the surface normal as SampleNoisyCloud moves its blunders; the
+// `blunder` attribute (replaced if there) flags them. Other attributes are
+// kept. Returns the number of blunders; throws InputError on an empty
+// cloud.
+size_t InjectBlunders(const TriangleMesh& surface,
+                      const NoisyCloudOptions& options,
+                      PointCloud* cloud);
+
 // The named attribute that marks blunders.
 inline constexpr const char* kBlunderAttribute = "blunder";
 

@@ -86,5 +86,50 @@ TEST(CloudScene, NoiseAndBlundersAsAsked) {
   EXPECT_NEAR(good_rms / sigma_rms, 1.0, 0.1);
 }
 
+// Blunders injected into an existing cloud: exactly the share asked of the
+// whole cloud, only points on the surface chosen, moved 1 to 20 cm off it,
+// everything else (other points, attributes) left as it was.
+TEST(CloudScene, BlundersInjectedIntoAnExistingCloud) {
+  ReliefCylinderOptions cylinder;
+  cylinder.num_angles = 360;
+  cylinder.num_heights = 200;
+  const TriangleMesh truth = MakeReliefCylinder(cylinder);
+  NoisyCloudOptions options;
+  options.num_points = 10000;
+  options.blunder_fraction = 0;
+  PointCloud cloud = SampleNoisyCloud(truth, options);
+  // A tenth of the points far off the surface (the ground a dense matcher
+  // also delivers): never chosen.
+  for (size_t i = 0; i < cloud.size(); i += 10) {
+    cloud.positions[i] += Eigen::Vector3d(0, 0, 10);
+  }
+  const PointCloud before = cloud;
+  options.blunder_fraction = 0.02;
+  options.seed = 7;
+  EXPECT_EQ(InjectBlunders(truth, options, &cloud), 200u);
+  const PointAttribute* flags = cloud.FindAttribute(kBlunderAttribute);
+  ASSERT_NE(flags, nullptr);
+  ASSERT_NE(cloud.FindAttribute("sx"), nullptr);
+  const std::vector<double> d = PointToMeshDistances(cloud, truth, 2);
+  size_t num_blunders = 0;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    if (flags->values[i] != 0) {
+      ++num_blunders;
+      EXPECT_NE(i % 10, 0u);
+      EXPECT_GT(d[i], 0.009);
+      EXPECT_LT(d[i], 0.2 + 1e-6);
+    } else {
+      EXPECT_EQ(cloud.positions[i], before.positions[i]);
+    }
+  }
+  EXPECT_EQ(num_blunders, 200u);
+  // Nothing on the surface: refused.
+  PointCloud far;
+  far.positions.assign(10, Eigen::Vector3d(0, 0, 100));
+  EXPECT_THROW(InjectBlunders(truth, options, &far), InputError);
+  PointCloud empty;
+  EXPECT_THROW(InjectBlunders(truth, options, &empty), InputError);
+}
+
 }  // namespace
 }  // namespace bayon
