@@ -68,7 +68,8 @@ struct PoissonOptions {
   int depth = 8;
   double samples_per_node = 1.5;
   double point_weight = 4.0;  // interpolation weight (screened Poisson)
-  // Vertices farther than this many median point spacings from every
+  // Vertices farther than this many median point spacings (or octree cells,
+  // where those are coarser) from every
   // input point are removed with their faces: the surface Poisson invents
   // over holes and beyond the cloud's border. 0 = keep all.
   double trim_distance_factor = 4.0;

@@ -78,6 +78,29 @@ TEST(Meshing, ThreeDimensionalMethodsOnATorus) {
   }
 }
 
+// Several masters' points of one surface, interleaved (a dense cloud from
+// overlapping masters): the nearest neighbours are far closer than the
+// sampling of the surface, and the trimming must allow for the octree's
+// cells (judged by the spacing alone, most of a well-covered surface was
+// cut away).
+TEST(Meshing, PoissonTrimAllowsForItsOctreeCells) {
+  const Torus& torus = SharedTorus();
+  PointCloud cloud = torus.cloud;
+  PointCloud second = torus.cloud;
+  for (Eigen::Vector3d& p : second.positions)
+    p += Eigen::Vector3d::Constant(3e-4);
+  cloud.Append(second);
+  MeshOptions options;
+  options.method = MeshMethod::kPoisson;
+  options.poisson.depth = 6;
+  options.num_threads = 2;
+  MeshReport report;
+  MeshPointCloud(cloud, options, &report);
+  std::cout << report.Summary() << std::endl;
+  EXPECT_TRUE(report.topology.IsClosed());
+  EXPECT_EQ(report.num_trimmed_faces, 0u);
+}
+
 TEST(Meshing, NormalsEstimatedOrRefused) {
   PointCloud cloud = SharedTorus().cloud;
   cloud.normals.clear();

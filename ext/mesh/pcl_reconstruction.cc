@@ -111,13 +111,21 @@ TriangleMesh PoissonMesh(const PointCloud& cloud,
   for (const pcl::PointXYZ& p : vertices) {
     mesh.vertices.positions.push_back(centered.FromPcl(p));
   }
-  // Trim: faces with a vertex far from every input point.
+  // Trim: faces with a vertex far from every input point. Far in units of
+  // the point spacing, or of the octree's finest cell where that is coarser
+  // (the surface runs through the cells: a vertex lies up to a cell away
+  // from the points even where they cover the surface well; PCL's cube is
+  // the bounding box's longest side, enlarged by its scale, 1.1).
   std::vector<bool> near(vertices.size(), true);
   if (options.trim_distance_factor > 0) {
     pcl::KdTreeFLANN<pcl::PointXYZ> tree;
     tree.setInputCloud(centered.cloud);
-    const float limit = static_cast<float>(
-        std::pow(options.trim_distance_factor * median_spacing, 2));
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& p : cloud.positions) box.extend(p);
+    const double cell =
+        1.1 * box.sizes().maxCoeff() / std::ldexp(1.0, options.depth);
+    const float limit = static_cast<float>(std::pow(
+        options.trim_distance_factor * std::max(median_spacing, cell), 2));
     std::vector<int> found(1);
     std::vector<float> squared(1);
     for (size_t i = 0; i < vertices.size(); ++i) {
