@@ -44,11 +44,16 @@ TEST(CloudScene, SurfacesAreOrientedManifolds) {
   EXPECT_THROW(MakeReliefCylinder(cylinder), InputError);
 }
 
-TEST(CloudScene, NoiseAndBlundersAsAsked) {
+// A relief cylinder at half a degree by 2 cm.
+TriangleMesh SmallReliefCylinder() {
   ReliefCylinderOptions cylinder;
   cylinder.num_angles = 360;
   cylinder.num_heights = 200;
-  const TriangleMesh truth = MakeReliefCylinder(cylinder);
+  return MakeReliefCylinder(cylinder);
+}
+
+TEST(CloudScene, NoiseAndBlundersAsAsked) {
+  const TriangleMesh truth = SmallReliefCylinder();
   NoisyCloudOptions options;
   options.num_points = 20000;
   options.sigma_m = 0.003;
@@ -90,10 +95,7 @@ TEST(CloudScene, NoiseAndBlundersAsAsked) {
 // whole cloud, only points on the surface chosen, moved 1 to 20 cm off it,
 // everything else (other points, attributes) left as it was.
 TEST(CloudScene, BlundersInjectedIntoAnExistingCloud) {
-  ReliefCylinderOptions cylinder;
-  cylinder.num_angles = 360;
-  cylinder.num_heights = 200;
-  const TriangleMesh truth = MakeReliefCylinder(cylinder);
+  const TriangleMesh truth = SmallReliefCylinder();
   NoisyCloudOptions options;
   options.num_points = 10000;
   options.blunder_fraction = 0;

@@ -4,7 +4,10 @@
 # edit` (local surface fitting and PCL's statistical outlier removal), then
 # every `bayon mesh` method on the edited cloud, and normal estimation (PCL +
 # MST orientation) on the same cloud without normals. Prints wall time and
-# peak memory (/usr/bin/time -v) per step.
+# peak memory (/usr/bin/time -v) per step. Then, where `scripts/bench.sh
+# dense` has made it, the same for fountain-P11's dense cloud (bayon's own
+# orientation and MPGC): edited, and meshed by the 3D methods and stock
+# `colmap poisson_mesher`.
 #   scripts/bench.sh mesh [num_points]     (default 1000000)
 set -euo pipefail
 num_points="${1:-1000000}"
@@ -51,4 +54,20 @@ done
 run "mesh greedy_projection + normals" "$dir/mesh/estimated.json" \
   "$BAYON" mesh --input_path "$dir/dense/plain.ply" --method greedy_projection \
   --output_path "$dir/mesh/estimated.ply" --report_path "$dir/mesh/estimated.json"
+
+fountain="$BAYON_BUILD/bench/dense/fountain/dense/points.ply"
+if [ -f "$fountain" ]; then
+  run "fountain edit surface_fit" "$dir/fountain_edit.json" \
+    "$BAYON" edit --input_path "$fountain" \
+    --output_path "$dir/dense/fountain_edited.ply" \
+    --report_path "$dir/fountain_edit.json"
+  for method in greedy_projection poisson advancing_front colmap_poisson; do
+    run "fountain mesh $method" "$dir/mesh/fountain_$method.json" \
+      "$BAYON" mesh --input_path "$dir/dense/fountain_edited.ply" \
+      --method "$method" --output_path "$dir/mesh/fountain_$method.ply" \
+      --report_path "$dir/mesh/fountain_$method.json"
+  done
+else
+  echo "(fountain-P11's dense cloud: run scripts/bench.sh dense first)"
+fi
 echo "outputs and logs in $dir"
