@@ -373,9 +373,8 @@ int RunEvaluate(int argc, char** argv) {
         !found.ground.empty() && surface_path == found.surface;
     const TriangleMesh ground =
         with_ground ? ReadMeshPly(found.ground) : TriangleMesh();
-    const TriangleMesh truth_geometry =
-        with_ground ? MergedGeometry({&surface, &ground}) : surface;
-    const MeshDistance truth_distance(truth_geometry);
+    const MeshDistance truth_distance(
+        with_ground ? MergedGeometry({&surface, &ground}) : surface);
     if (with_ground) report["accuracy_includes_ground"] = found.ground;
     SurfaceEvaluationOptions options;
     options.gsd_m = gsd_m;
@@ -444,7 +443,7 @@ int RunEvaluate(int argc, char** argv) {
           PointCloud before = ReadPointCloudPly(edit_input_path);
           Transform(truth_from_model, &before);
           const CloudEditEvaluation edit =
-              EvaluateCloudEdit(before, cloud, truth_geometry, num_threads);
+              EvaluateCloudEdit(before, cloud, truth_distance, num_threads);
           std::printf(
               "\n%s\n%s\n",
               CloudEditEvaluation::TableHeader().c_str(),

@@ -39,7 +39,7 @@ CloudEditEvaluation Edit(const Scene& scene,
                          CloudEditReport* report) {
   const PointCloud edited = EditPointCloud(scene.cloud, options, report);
   const CloudEditEvaluation e =
-      EvaluateCloudEdit(scene.cloud, edited, scene.truth, 2);
+      EvaluateCloudEdit(scene.cloud, edited, MeshDistance(scene.truth), 2);
   std::cout << report->Summary() << "\n"
             << CloudEditEvaluation::TableHeader() << "\n"
             << e.Table(label) << std::endl;

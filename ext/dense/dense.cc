@@ -16,6 +16,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 namespace bayon {
@@ -1051,27 +1052,27 @@ namespace {
 // BGR colours of the reasons in RejectMap: green where a point was found,
 // none where there is no texture, cold colours where there was no
 // approximation, warm ones where MPGC or a later test rejected it.
-cv::Scalar ReasonColor(DenseReject reason) {
+std::optional<cv::Scalar> ReasonColor(DenseReject reason) {
   switch (reason) {
     case DenseReject::kAccepted:
-      return {60, 200, 60};
+      return cv::Scalar(60, 200, 60);
     case DenseReject::kNoApproximation:
-      return {200, 90, 30};
+      return cv::Scalar(200, 90, 30);
     case DenseReject::kAmbiguous:
-      return {200, 200, 40};
+      return cv::Scalar(200, 200, 40);
     case DenseReject::kImprecise:
-      return {40, 220, 240};
+      return cv::Scalar(40, 220, 240);
     case DenseReject::kOffSurface:
-      return {220, 60, 220};
+      return cv::Scalar(220, 60, 220);
     case DenseReject::kIsolated:
-      return {160, 90, 140};
+      return cv::Scalar(160, 90, 140);
     case DenseReject::kInconsistent:
-      return {255, 255, 255};
+      return cv::Scalar(255, 255, 255);
     case DenseReject::kNoTexture:
     case DenseReject::kNumReasons:
-      return {-1, -1, -1};
+      return std::nullopt;
     default:  // the MPGC statuses
-      return {40, 40, 230};
+      return cv::Scalar(40, 40, 230);
   }
 }
 
@@ -1080,19 +1081,24 @@ cv::Scalar ReasonColor(DenseReject reason) {
 cv::Mat RejectMap(const DenseMasterReport& master, const cv::Mat& color) {
   cv::Mat picture;
   color.convertTo(picture, CV_8UC3, 0.5);  // dimmed: the cells stand out
+  // The cells' colours painted over a copy, blended back once (where
+  // nothing was painted the blend leaves the picture as it was).
+  cv::Mat painted = picture.clone();
   const int size = master.cell_size;
   for (int cy = 0; cy < master.reasons.rows; ++cy) {
     for (int cx = 0; cx < master.reasons.cols; ++cx) {
-      const cv::Scalar c = ReasonColor(
+      const std::optional<cv::Scalar> c = ReasonColor(
           static_cast<DenseReject>(master.reasons.at<uint8_t>(cy, cx)));
-      if (c[0] < 0) continue;
-      const cv::Rect cell(
-          master.border + cx * size, master.border + cy * size, size, size);
-      cv::Mat roi = picture(cell & cv::Rect(0, 0, picture.cols, picture.rows));
-      cv::addWeighted(
-          roi, 0.35, cv::Mat(roi.size(), roi.type(), c), 0.65, 0, roi);
+      if (!c) continue;
+      cv::rectangle(
+          painted,
+          cv::Rect(
+              master.border + cx * size, master.border + cy * size, size, size),
+          *c,
+          cv::FILLED);
     }
   }
+  cv::addWeighted(picture, 0.35, painted, 0.65, 0, picture);
   // Legend: the reasons that occur, with their counts.
   const double scale = std::max(0.5, picture.cols / 2400.0);
   const int line = static_cast<int>(std::lround(24 * scale));
@@ -1100,11 +1106,9 @@ cv::Mat RejectMap(const DenseMasterReport& master, const cv::Mat& color) {
   for (int r = 0; r < static_cast<int>(DenseReject::kNumReasons); ++r) {
     const DenseReject reason = static_cast<DenseReject>(r);
     if (master.rejects[r] == 0) continue;
-    cv::Scalar c = ReasonColor(reason);
-    if (c[0] < 0) c = {128, 128, 128};
     cv::rectangle(picture,
                   cv::Rect(line / 2, y - line + 6, line - 6, line - 6),
-                  c,
+                  ReasonColor(reason).value_or(cv::Scalar(128, 128, 128)),
                   cv::FILLED);
     cv::putText(picture,
                 StrCat(DenseRejectName(reason), " ", master.rejects[r]),

@@ -71,7 +71,7 @@ std::string CloudEditEvaluation::Table(const std::string& label) const {
 
 CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
                                       const PointCloud& after,
-                                      const TriangleMesh& truth,
+                                      const MeshDistance& distance,
                                       int num_threads) {
   std::vector<Eigen::Vector3d> good_before, blunders_before, good_after,
       blunders_after;
@@ -82,7 +82,6 @@ CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
   evaluation.num_blunders_after = blunders_after.size();
   evaluation.num_good_before = good_before.size();
   evaluation.num_good_after = good_after.size();
-  const MeshDistance distance(truth);
   evaluation.good_before =
       ComputeDistanceStatistics(distance.Distances(good_before, num_threads));
   const std::vector<double> good_d =

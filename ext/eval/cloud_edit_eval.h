@@ -29,10 +29,11 @@ struct CloudEditEvaluation {
   static std::string TableHeader();
 };
 
-// Throws InputError when a cloud lacks the `blunder` attribute.
+// Distances to the true surface by `truth`. Throws InputError when a cloud
+// lacks the `blunder` attribute.
 CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
                                       const PointCloud& after,
-                                      const TriangleMesh& truth,
+                                      const MeshDistance& truth,
                                       int num_threads = -1);
 
 }  // namespace bayon

@@ -222,39 +222,36 @@ void NoisyCloudOptions::Check() const {
 
 namespace {
 
-// Turns round(blunder_fraction * n) of the cloud's points, at random, into
-// blunders: each moved from its place on the surface along the surface
-// normal there, to either side, by a distance uniform in [blunder_min_m,
-// blunder_max_m]. A displacement that lands near another part of the
-// surface (into the wall behind a relief, under a cornice) is no blunder of
-// that size: it is drawn again (up to 20 times) until the point is at least
-// blunder_min_m from the whole surface. Returns the flags (0/1) per point.
+// Turns `num_blunders` of the candidate points, at random, into blunders:
+// candidate k (cloud point candidates[k]) is moved from its place on the
+// surface, on_surface[k], along the surface normal there, normals[k], to
+// either side, by a distance uniform in [blunder_min_m, blunder_max_m]. A
+// displacement that lands near another part of the surface (into the wall
+// behind a relief, under a cornice) is no blunder of that size: with
+// `distance` (the surface's), it is drawn again (up to 20 times) until the
+// point is at least blunder_min_m from the whole surface. Returns the flags
+// (0/1) of all the cloud's points.
 std::vector<double> DisplaceBlunders(
-    const TriangleMesh& surface,
+    const MeshDistance* distance,
+    const std::vector<size_t>& candidates,
     const std::vector<Eigen::Vector3d>& on_surface,
     const std::vector<Eigen::Vector3d>& normals,
+    size_t num_blunders,
     const NoisyCloudOptions& options,
     std::mt19937_64* rng,
     PointCloud* cloud) {
-  const size_t n = cloud->size();
-  std::vector<size_t> order(n);
+  std::vector<size_t> order(candidates.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::shuffle(order.begin(), order.end(), *rng);
-  const size_t num_blunders =
-      static_cast<size_t>(std::llround(options.blunder_fraction * n));
-  std::vector<double> flags(n, 0.0);
+  std::vector<double> flags(cloud->size(), 0.0);
   std::uniform_real_distribution<double> offset(options.blunder_min_m,
                                                 options.blunder_max_m);
   std::bernoulli_distribution side(0.5);
-  std::unique_ptr<MeshDistance> distance;
-  if (num_blunders > 0 && options.blunder_min_m > 0) {
-    distance = std::make_unique<MeshDistance>(surface);
-  }
-  for (size_t b = 0; b < num_blunders; ++b) {
-    const size_t i = order[b];
+  for (size_t b = 0; b < std::min(num_blunders, order.size()); ++b) {
+    const size_t k = order[b], i = candidates[k];
     for (int attempt = 0; attempt < 20; ++attempt) {
       const double d = offset(*rng) * (side(*rng) ? 1.0 : -1.0);
-      cloud->positions[i] = on_surface[i] + d * normals[i];
+      cloud->positions[i] = on_surface[k] + d * normals[k];
       if (!distance || distance->Closest(cloud->positions[i]).distance >=
                            options.blunder_min_m) {
         break;
@@ -265,14 +262,9 @@ std::vector<double> DisplaceBlunders(
   return flags;
 }
 
-std::vector<Eigen::Vector3d> SamplePositions(
-    const std::vector<SurfaceSample>& samples) {
-  std::vector<Eigen::Vector3d> positions;
-  positions.reserve(samples.size());
-  for (const SurfaceSample& sample : samples) {
-    positions.push_back(sample.position);
-  }
-  return positions;
+size_t NumBlunders(const NoisyCloudOptions& options, size_t cloud_size) {
+  return static_cast<size_t>(
+      std::llround(options.blunder_fraction * cloud_size));
 }
 
 }  // namespace
@@ -301,8 +293,23 @@ PointCloud SampleNoisyCloud(const TriangleMesh& surface,
     cloud.positions[i] = samples[i].position + noise;
   }
 
-  std::vector<double> flags = DisplaceBlunders(
-      surface, SamplePositions(samples), normals, options, &rng, &cloud);
+  const size_t num_blunders = NumBlunders(options, n);
+  std::unique_ptr<MeshDistance> distance;
+  if (num_blunders > 0 && options.blunder_min_m > 0) {
+    distance = std::make_unique<MeshDistance>(surface);
+  }
+  std::vector<size_t> all(n);
+  std::iota(all.begin(), all.end(), size_t{0});
+  std::vector<Eigen::Vector3d> on_surface(n);
+  for (size_t i = 0; i < n; ++i) on_surface[i] = samples[i].position;
+  std::vector<double> flags = DisplaceBlunders(distance.get(),
+                                               all,
+                                               on_surface,
+                                               normals,
+                                               num_blunders,
+                                               options,
+                                               &rng,
+                                               &cloud);
   if (options.with_normals) {
     cloud.normals.resize(n);
     for (size_t i = 0; i < n; ++i) cloud.normals[i] = normals[i].cast<float>();
@@ -343,22 +350,18 @@ size_t InjectBlunders(const TriangleMesh& surface,
                     0.5 * options.blunder_min_m,
                     " m): is it in the truth's frame?");
   }
-  PointCloud subset;
-  for (size_t i : candidates) subset.positions.push_back(cloud->positions[i]);
   std::mt19937_64 rng(options.seed ^ 0x9e3779b97f4a7c15ULL);
-  NoisyCloudOptions scaled = options;
   // The share is of the whole cloud.
-  scaled.blunder_fraction = std::min(
-      1.0, options.blunder_fraction * cloud->size() / candidates.size());
-  const std::vector<double> subset_flags =
-      DisplaceBlunders(surface, on_surface, normals, scaled, &rng, &subset);
-  std::vector<double> flags(cloud->size(), 0.0);
-  size_t count = 0;
-  for (size_t k = 0; k < candidates.size(); ++k) {
-    cloud->positions[candidates[k]] = subset.positions[k];
-    flags[candidates[k]] = subset_flags[k];
-    count += subset_flags[k] != 0;
-  }
+  const std::vector<double> flags =
+      DisplaceBlunders(&distance,
+                       candidates,
+                       on_surface,
+                       normals,
+                       NumBlunders(options, cloud->size()),
+                       options,
+                       &rng,
+                       cloud);
+  const size_t count = std::count(flags.begin(), flags.end(), 1.0);
   cloud->AddAttribute(kBlunderAttribute, PlyScalarType::kUChar).values = flags;
   return count;
 }
