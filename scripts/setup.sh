@@ -25,7 +25,11 @@ packages=(
   libpcl-dev libcgal-dev libopenmesh-dev libtbb-dev
   libcli11-dev nlohmann-json3-dev libexiv2-dev libtinygltf-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium  # viewer_test opens the page of bayon viewer in it
 )
+# bayon viewer's page is built with npm (tools/viewer); a Node.js from another
+# source (which brings its own npm) is kept.
+if ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
 missing=()
 for package in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then

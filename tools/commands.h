@@ -25,5 +25,6 @@ int RunRelative(int argc, char** argv);
 int RunDisparity(int argc, char** argv);
 int RunTiePoints(int argc, char** argv);
 int RunRefineKeypoints(int argc, char** argv);
+int RunViewer(int argc, char** argv);
 
 }  // namespace bayon

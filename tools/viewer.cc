@@ -1,0 +1,296 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// `bayon viewer`: a textured model (.glb) as one self-contained web page,
+// <output_path>/index.html: three.js with orbit controls and the textured,
+// shaded, wireframe and anaglyph modes (tools/viewer/src/viewer.js, bundled
+// at build time into kViewerBundleJs), and the model itself.
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+#include <glog/logging.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+namespace bayon {
+
+// tools/viewer/src/viewer.js with three.js, one minified classic script
+// (generated: viewer_bundle.cc in the build folder, see tools/CMakeLists.txt).
+extern const char kViewerBundleJs[];
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ViewerOptions {
+  std::string title;  // default: the model's file name
+  std::string mode = "textured";
+  // The model's vertical in the glTF scene: y, glTF's convention, which
+  // bayon's .glb writer follows by turning the z-up datum with a node
+  // rotation.
+  std::string up_axis = "y";
+  double azimuth_deg = 30;    // first view, from the up axis' e1 towards e2
+  double elevation_deg = 20;  // above the horizontal
+  double fov_deg = 40;        // vertical field of view
+
+  void Check() const {
+    CheckOption(elevation_deg >= -90 && elevation_deg <= 90,
+                "--elevation_deg",
+                "in [-90, 90]",
+                elevation_deg);
+    CheckOption(
+        fov_deg > 1 && fov_deg < 170, "--fov_deg", "in (1, 170)", fov_deg);
+  }
+};
+
+// What the page will show, read from the glTF binary's JSON chunk.
+struct GlbSummary {
+  size_t num_meshes = 0;
+  size_t num_vertices = 0;
+  size_t num_faces = 0;
+  size_t num_images = 0;
+};
+
+uint32_t ReadU32(const std::string& bytes, size_t offset) {
+  uint32_t value = 0;
+  std::memcpy(&value, bytes.data() + offset, 4);  // glTF is little-endian
+  return value;
+}
+
+size_t AccessorCount(const nlohmann::json& json,
+                     const nlohmann::json& index,
+                     const std::string& path) {
+  const auto& accessors = json.at("accessors");
+  if (!index.is_number_unsigned() || index.get<size_t>() >= accessors.size()) {
+    ThrowInputError(path, ": glTF refers to a missing accessor ", index.dump());
+  }
+  return accessors.at(index.get<size_t>()).at("count").get<size_t>();
+}
+
+// Checks the glTF 2.0 binary container (12-byte header, a JSON chunk first)
+// and counts what it holds; InputError naming the file otherwise.
+GlbSummary CheckGlb(const std::string& bytes, const std::string& path) {
+  constexpr uint32_t kMagic = 0x46546C67;      // "glTF"
+  constexpr uint32_t kJsonChunk = 0x4E4F534A;  // "JSON"
+  if (bytes.size() < 20 || ReadU32(bytes, 0) != kMagic) {
+    ThrowInputError(path, ": not a glTF binary (.glb) file");
+  }
+  if (ReadU32(bytes, 4) != 2) {
+    ThrowInputError(
+        path, ": glTF version ", ReadU32(bytes, 4), " (expected 2)");
+  }
+  if (ReadU32(bytes, 8) != bytes.size()) {
+    ThrowInputError(path,
+                    ": header says ",
+                    ReadU32(bytes, 8),
+                    " bytes, the file has ",
+                    bytes.size(),
+                    " (truncated?)");
+  }
+  const uint32_t json_length = ReadU32(bytes, 12);
+  if (ReadU32(bytes, 16) != kJsonChunk ||
+      20 + size_t{json_length} > bytes.size()) {
+    ThrowInputError(path, ": the first chunk is not a complete JSON chunk");
+  }
+  GlbSummary summary;
+  try {
+    const nlohmann::json json =
+        nlohmann::json::parse(bytes.substr(20, json_length));
+    if (!json.contains("meshes") || json.at("meshes").empty()) {
+      ThrowInputError(path, ": the glTF file has no meshes");
+    }
+    for (const auto& mesh : json.at("meshes")) {
+      ++summary.num_meshes;
+      for (const auto& primitive : mesh.at("primitives")) {
+        const size_t num_positions = AccessorCount(
+            json, primitive.at("attributes").at("POSITION"), path);
+        summary.num_vertices += num_positions;
+        summary.num_faces +=
+            (primitive.contains("indices")
+                 ? AccessorCount(json, primitive.at("indices"), path)
+                 : num_positions) /
+            3;
+      }
+    }
+    if (json.contains("images")) summary.num_images = json.at("images").size();
+  } catch (const nlohmann::json::exception& error) {
+    ThrowInputError(path, ": invalid glTF JSON: ", error.what());
+  }
+  return summary;
+}
+
+std::string Base64(const std::string& bytes) {
+  static const char kAlphabet[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const uint32_t triple = uint32_t(uint8_t(bytes[i])) << 16 |
+                            uint32_t(uint8_t(bytes[i + 1])) << 8 |
+                            uint8_t(bytes[i + 2]);
+    out += kAlphabet[triple >> 18];
+    out += kAlphabet[(triple >> 12) & 63];
+    out += kAlphabet[(triple >> 6) & 63];
+    out += kAlphabet[triple & 63];
+  }
+  if (i < bytes.size()) {
+    const bool two = i + 1 < bytes.size();
+    const uint32_t triple = uint32_t(uint8_t(bytes[i])) << 16 |
+                            (two ? uint32_t(uint8_t(bytes[i + 1])) << 8 : 0);
+    out += kAlphabet[triple >> 18];
+    out += kAlphabet[(triple >> 12) & 63];
+    out += two ? kAlphabet[(triple >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+std::string HtmlEscape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+// The page: options as JSON, the model as base64 and the bundled script, all
+// inline. The model is embedded rather than referenced because browsers block
+// fetch() and XMLHttpRequest of local files on file:// pages; base64 costs a
+// third more bytes but keeps the page one file that opens anywhere.
+std::string BuildPage(const ViewerOptions& options, const std::string& glb) {
+  nlohmann::ordered_json config;
+  config["title"] = options.title;
+  config["mode"] = options.mode;
+  config["up_axis"] = options.up_axis;
+  config["azimuth_deg"] = options.azimuth_deg;
+  config["elevation_deg"] = options.elevation_deg;
+  config["fov_deg"] = options.fov_deg;
+  // '<' only occurs inside JSON strings, where \u003c means the same and
+  // cannot close the <script> element.
+  std::string config_text;
+  for (const char c : config.dump()) {
+    config_text += c == '<' ? std::string("\\u003c") : std::string(1, c);
+  }
+  std::string page;
+  page.reserve(glb.size() * 4 / 3 + std::strlen(kViewerBundleJs) + 1024);
+  page +=
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
+  page +=
+      "<meta name=\"viewport\" content=\"width=device-width, "
+      "initial-scale=1\">\n";
+  page += "<meta name=\"generator\" content=\"bayon viewer\">\n";
+  page += "<title>" + HtmlEscape(options.title) + "</title>\n</head>\n<body>\n";
+  page += "<script type=\"application/json\" id=\"bayon-viewer-config\">" +
+          config_text + "</script>\n";
+  page += "<script type=\"application/octet-stream\" id=\"bayon-model\">";
+  page += Base64(glb);
+  page += "</script>\n<script>\n";
+  page += kViewerBundleJs;
+  page += "\n</script>\n</body>\n</html>\n";
+  return page;
+}
+
+}  // namespace
+
+int RunViewer(int argc, char** argv) {
+  std::string model_path, output_path, log_path;
+  bool overwrite = false;
+  ViewerOptions options;
+  CommandLine command(
+      "viewer",
+      "A textured model (glTF binary, .glb, as bayon texture writes it) as a "
+      "self-contained web page, <output_path>/index.html: three.js with orbit "
+      "controls (drag: orbit, right drag: pan, wheel: zoom) and textured, "
+      "shaded, wireframe and red-cyan anaglyph modes (buttons or keys 1-4). "
+      "The model and the script are inside the page, so it works offline, "
+      "from the file system or any static server. URL parameters ?mode=, "
+      "&azimuth=, &elevation=, &fov= override the first view.");
+  CLI::App& app = command.app();
+  app.add_option("--model_path", model_path, "Textured model (.glb)")
+      ->required();
+  app.add_option("--output_path", output_path, "Folder to create (index.html)")
+      ->required();
+  app.add_option("--title", options.title, "Page title (default: model name)");
+  app.add_option("--mode", options.mode, "First display mode")
+      ->transform(
+          CLI::IsMember({"textured", "shaded", "wireframe", "anaglyph"}));
+  app.add_option("--up_axis",
+                 options.up_axis,
+                 "The model's vertical axis in the glTF scene: y (glTF's "
+                 "convention, as bayon texture writes it), z for a .glb "
+                 "in z-up object coordinates")
+      ->transform(CLI::IsMember({"x", "y", "z"}));
+  app.add_option("--azimuth_deg",
+                 options.azimuth_deg,
+                 "First view: azimuth around the up axis, from the datum's "
+                 "+x towards +y (counter-clockwise seen from above)");
+  app.add_option("--elevation_deg",
+                 options.elevation_deg,
+                 "First view: elevation above the horizontal");
+  app.add_option("--fov_deg", options.fov_deg, "Vertical field of view");
+  app.add_option("--overwrite", overwrite, "Replace an existing output folder");
+  app.add_option("--log_path",
+                 log_path,
+                 "Append the log to this file (default: logs/viewer.log "
+                 "beside the output folder)");
+  if (!command.Parse(argc, argv)) return 0;
+
+  options.Check();
+  CheckFileExists(model_path, "--model_path");
+  CheckOutputPath(output_path, overwrite);
+  const std::string glb = ReadFileToString(model_path);
+  const GlbSummary summary = CheckGlb(glb, model_path);
+  if (options.title.empty()) {
+    options.title = fs::path(model_path).filename().string();
+  }
+  if (log_path.empty()) {
+    fs::path output = fs::absolute(output_path).lexically_normal();
+    if (!output.has_filename()) output = output.parent_path();
+    log_path = WorkspaceLogPath(output.parent_path().string(), "viewer");
+  }
+  command.StartLog(log_path);
+  if (summary.num_images == 0) {
+    LOG(WARNING) << model_path
+                 << ": the model has no texture image; the textured mode "
+                    "shows its base colour";
+  }
+
+  OutputDirectory output(output_path, overwrite);
+  const std::string page = BuildPage(options, glb);
+  WriteFileAtomically(output.File("index.html"), page);
+  output.Commit();
+  command.PrintSummary(StrCat(summary.num_vertices,
+                              " vertices, ",
+                              summary.num_faces,
+                              " faces, ",
+                              summary.num_images,
+                              " texture image(s); page ",
+                              (page.size() + 1023) / 1024,
+                              " KiB\n  -> ",
+                              output.final_path(),
+                              "/index.html"));
+  return 0;
+}
+
+}  // namespace bayon
