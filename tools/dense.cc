@@ -52,22 +52,6 @@ nlohmann::ordered_json ReportToJson(const DenseReport& report,
   return json;
 }
 
-// The model with its full calibration (calibration.json beside it) and the
-// scanned frames' interior orientations from the database, if one is given.
-Scene ReadOrientedModel(const std::string& input_path,
-                        const std::string& database_path) {
-  Scene scene = ReadModel(input_path);
-  for (const auto& [camera_id, camera] :
-       ReadCalibrationsBesideModel(input_path)) {
-    if (scene.cameras.contains(camera_id)) scene.cameras.at(camera_id) = camera;
-  }
-  if (!database_path.empty()) {
-    Database database(database_path, Database::Mode::kReadOnly);
-    SetInteriorFrames(&database, &scene);
-  }
-  return scene;
-}
-
 }  // namespace
 
 int RunDense(int argc, char** argv) {

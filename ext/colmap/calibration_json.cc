@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/colmap/calibration_json.h"
 
+#include "ext/colmap/bayon_tables.h"
+#include "ext/colmap/database.h"
+#include "ext/colmap/model_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 
@@ -179,6 +182,20 @@ std::map<camera_t, Camera> ReadCalibrationsBesideModel(
     cameras[entry.camera.camera_id] = entry.camera;
   }
   return cameras;
+}
+
+Scene ReadOrientedModel(const std::string& model_path,
+                        const std::string& database_path) {
+  Scene scene = ReadModel(model_path);
+  for (const auto& [camera_id, camera] :
+       ReadCalibrationsBesideModel(model_path)) {
+    if (scene.cameras.contains(camera_id)) scene.cameras.at(camera_id) = camera;
+  }
+  if (!database_path.empty()) {
+    Database database(database_path, Database::Mode::kReadOnly);
+    SetInteriorFrames(&database, &scene);
+  }
+  return scene;
 }
 
 }  // namespace bayon

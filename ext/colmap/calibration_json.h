@@ -19,6 +19,7 @@
 
 #include "ext/core/camera.h"
 #include "ext/core/camera_conversion.h"
+#include "ext/core/scene.h"
 
 #include <map>
 #include <optional>
@@ -55,5 +56,13 @@ std::vector<CalibrationEntry> ReadCalibrationJson(const std::string& path);
 // cameras rows are the whole calibration).
 std::map<camera_t, Camera> ReadCalibrationsBesideModel(
     const std::string& model_path);
+
+// A sparse model as the dense and texture stages need it: the cameras with
+// their full calibration (calibration.json beside the model) and, where a
+// database is given, the scanned frames' interior orientations from its
+// bayon_interior table. Throws InputError for an unreadable model or
+// database.
+Scene ReadOrientedModel(const std::string& model_path,
+                        const std::string& database_path);
 
 }  // namespace bayon

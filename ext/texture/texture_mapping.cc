@@ -1,0 +1,720 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/texture/texture_mapping.h"
+
+#include "ext/core/errors.h"
+#include "ext/core/parallel.h"
+#include "ext/core/progress.h"
+#include "ext/image/image_io.h"
+#include "ext/image/radiometry.h"
+#include "ext/render/mesh_renderer.h"
+
+#include <glog/logging.h>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+namespace bayon {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// One photograph that sees a face: its index and the face's projected area.
+struct FaceView {
+  int image = -1;
+  float area_px = 0;
+};
+
+// Projected corners of a face in one image (pixels); false when a corner is
+// behind the camera.
+bool ProjectFace(const TriangleMesh& mesh,
+                 int face,
+                 const TextureImage& image,
+                 Eigen::Vector2d corners[3]) {
+  const ImageFrame* frame = image.image->frame ? &*image.image->frame : nullptr;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& x = mesh.vertices.positions[mesh.faces[face][k]];
+    if (!image.camera->ImgFromCam(
+            image.image->cam_from_world * x, &corners[k], frame)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+double TriangleArea(const Eigen::Vector2d& a,
+                    const Eigen::Vector2d& b,
+                    const Eigen::Vector2d& c) {
+  return 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+}
+
+double TriangleArea3(const TriangleMesh& mesh, int face) {
+  const auto& p = mesh.vertices.positions;
+  const Eigen::Vector3i& f = mesh.faces[face];
+  return 0.5 * (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]).norm();
+}
+
+// Areas of every face in one photograph, 0 where the face is not seen (see
+// the header: centroid and three inner points in front of the depth map,
+// not edge-on).
+std::vector<float> VisibleAreas(const TriangleMesh& mesh,
+                                const MeshRenderer& renderer,
+                                const TextureImage& image,
+                                const TextureOptions& options) {
+  RenderView view;
+  view.camera = *image.camera;
+  view.cam_from_world = image.image->cam_from_world;
+  view.frame = image.image->frame;
+  RenderOptions render_options;
+  render_options.supersampling = 1;
+  render_options.geometry_buffers = true;
+  render_options.num_threads = options.num_threads;
+  const cv::Mat depth = renderer.Render(view, Lighting(), render_options).depth;
+
+  const Rigid3d& cam_from_world = image.image->cam_from_world;
+  const Eigen::Vector3d center = cam_from_world.Center();
+  const ImageFrame* frame = image.image->frame ? &*image.image->frame : nullptr;
+  const double min_sin = std::sin(options.min_view_angle_deg * kDegToRad);
+  const int num_faces = static_cast<int>(mesh.NumFaces());
+  std::vector<float> areas(num_faces, 0.0f);
+  ParallelFor(num_faces, options.num_threads, [&](int face) {
+    const auto& p = mesh.vertices.positions;
+    const Eigen::Vector3i& f = mesh.faces[face];
+    const Eigen::Vector3d centroid = (p[f[0]] + p[f[1]] + p[f[2]]) / 3.0;
+    const Eigen::Vector3d normal =
+        (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]).normalized();
+    const Eigen::Vector3d ray = (centroid - center).normalized();
+    if (!(std::abs(normal.dot(ray)) >= min_sin)) return;
+    Eigen::Vector2d corners[3];
+    if (!ProjectFace(mesh, face, image, corners)) return;
+    // The centroid and points a fifth of the way from each corner to it:
+    // inside the face, so that a neighbour in front of a shared edge does
+    // not hide it.
+    Eigen::Vector3d samples[4] = {centroid,
+                                  0.8 * p[f[0]] + 0.2 * centroid,
+                                  0.8 * p[f[1]] + 0.2 * centroid,
+                                  0.8 * p[f[2]] + 0.2 * centroid};
+    for (const Eigen::Vector3d& sample : samples) {
+      const Eigen::Vector3d in_cam = cam_from_world * sample;
+      Eigen::Vector2d pixel;
+      if (!image.camera->ImgFromCam(in_cam, &pixel, frame)) return;
+      const int x = static_cast<int>(std::floor(pixel.x()));
+      const int y = static_cast<int>(std::floor(pixel.y()));
+      if (x < 0 || y < 0 || x >= depth.cols || y >= depth.rows) return;
+      const float seen = depth.at<float>(y, x);
+      // 0: the pixel's central ray slips past the mesh (a silhouette).
+      if (seen > 0 && seen < in_cam.z() * (1.0 - options.depth_tolerance)) {
+        return;
+      }
+    }
+    areas[face] =
+        static_cast<float>(TriangleArea(corners[0], corners[1], corners[2]));
+  });
+  return areas;
+}
+
+// Union-find over faces.
+int FindRoot(std::vector<int>* parent, int i) {
+  while ((*parent)[i] != i) {
+    (*parent)[i] = (*parent)[(*parent)[i]];
+    i = (*parent)[i];
+  }
+  return i;
+}
+
+// The mesh's edges as (smaller vertex, larger vertex, face), sorted, so
+// that the faces sharing an edge are neighbours in the list.
+struct EdgeFace {
+  int a, b, face;
+  bool operator<(const EdgeFace& o) const {
+    return a != o.a ? a < o.a : (b != o.b ? b < o.b : face < o.face);
+  }
+  bool SameEdge(const EdgeFace& o) const { return a == o.a && b == o.b; }
+};
+
+std::vector<EdgeFace> SortedEdges(const TriangleMesh& mesh) {
+  std::vector<EdgeFace> edges;
+  edges.reserve(3 * mesh.NumFaces());
+  for (int face = 0; face < static_cast<int>(mesh.NumFaces()); ++face) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.faces[face][k];
+      const int b = mesh.faces[face][(k + 1) % 3];
+      edges.push_back({std::min(a, b), std::max(a, b), face});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  return edges;
+}
+
+struct Chart {
+  int image = -1;  // the optimal image; -1: the faces no photograph sees
+  std::vector<int> faces;
+  double pixels_per_metre = 0;
+  // Bounding box of the scaled projection (texels), and where that box's
+  // minimum lands in the atlas (texels, y down).
+  Eigen::Vector2d min = Eigen::Vector2d::Zero();
+  Eigen::Vector2d max = Eigen::Vector2d::Zero();
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();
+  int width = 0;  // with padding on both sides
+  int height = 0;
+};
+
+// Shelf packing, tallest charts first; returns the atlas size.
+cv::Size PackCharts(std::vector<Chart>* charts) {
+  double area = 0;
+  int widest = 0;
+  for (const Chart& c : *charts) {
+    area += double(c.width) * c.height;
+    widest = std::max(widest, c.width);
+  }
+  const int atlas_width =
+      std::max(widest, static_cast<int>(std::ceil(std::sqrt(area * 1.1))));
+  std::vector<int> order(charts->size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return (*charts)[a].height > (*charts)[b].height;
+  });
+  int x = 0, y = 0, shelf_height = 0;
+  for (int i : order) {
+    Chart& c = (*charts)[i];
+    if (x + c.width > atlas_width) {
+      x = 0;
+      y += shelf_height;
+      shelf_height = 0;
+    }
+    c.offset = Eigen::Vector2d(x, y);
+    x += c.width;
+    shelf_height = std::max(shelf_height, c.height);
+  }
+  return cv::Size(atlas_width, y + shelf_height);
+}
+
+// Bilinear colour at a pixel position (COLMAP's convention); false outside.
+bool SampleColor(const cv::Mat& image,
+                 const Eigen::Vector2d& pixel,
+                 Eigen::Vector3f* color) {
+  const double u = pixel.x() - 0.5;
+  const double v = pixel.y() - 0.5;
+  if (!(u >= 0.0 && v >= 0.0 && u < image.cols - 1.0 && v < image.rows - 1.0)) {
+    return false;
+  }
+  const int ix = static_cast<int>(u);
+  const int iy = static_cast<int>(v);
+  const float fx = static_cast<float>(u - ix);
+  const float fy = static_cast<float>(v - iy);
+  const cv::Vec3b* r0 = image.ptr<cv::Vec3b>(iy) + ix;
+  const cv::Vec3b* r1 = image.ptr<cv::Vec3b>(iy + 1) + ix;
+  for (int c = 0; c < 3; ++c) {
+    (*color)[c] = (1 - fy) * ((1 - fx) * r0[0][c] + fx * r0[1][c]) +
+                  fy * ((1 - fx) * r1[0][c] + fx * r1[1][c]);
+  }
+  return true;
+}
+
+// Fills texels that no triangle covered from their covered neighbours,
+// ring by ring, `rings` times (padding against bleeding).
+void DilateAtlas(int rings, cv::Mat* atlas, cv::Mat* covered) {
+  for (int ring = 0; ring < rings; ++ring) {
+    cv::Mat color_sum, count;
+    cv::Mat atlas_f;
+    atlas->convertTo(atlas_f, CV_32FC3);
+    cv::Mat mask_f;
+    covered->convertTo(mask_f, CV_32F, 1.0 / 255.0);
+    cv::Mat masked;
+    cv::Mat mask3;
+    cv::merge(std::vector<cv::Mat>{mask_f, mask_f, mask_f}, mask3);
+    masked = atlas_f.mul(mask3);
+    cv::boxFilter(masked,
+                  color_sum,
+                  -1,
+                  cv::Size(3, 3),
+                  cv::Point(-1, -1),
+                  false,
+                  cv::BORDER_CONSTANT);
+    cv::boxFilter(mask_f,
+                  count,
+                  -1,
+                  cv::Size(3, 3),
+                  cv::Point(-1, -1),
+                  false,
+                  cv::BORDER_CONSTANT);
+    bool changed = false;
+    for (int y = 0; y < atlas->rows; ++y) {
+      uint8_t* m = covered->ptr<uint8_t>(y);
+      const float* n = count.ptr<float>(y);
+      const cv::Vec3f* s = color_sum.ptr<cv::Vec3f>(y);
+      cv::Vec3b* a = atlas->ptr<cv::Vec3b>(y);
+      for (int x = 0; x < atlas->cols; ++x) {
+        if (m[x] || n[x] < 0.5f) continue;
+        for (int c = 0; c < 3; ++c) {
+          a[x][c] = cv::saturate_cast<uint8_t>(s[x][c] / n[x]);
+        }
+        m[x] = 128;  // filled now; counts for the next ring
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+}
+
+}  // namespace
+
+const char* TexturePreprocessName(TexturePreprocess preprocess) {
+  switch (preprocess) {
+    case TexturePreprocess::kNone:
+      return "none";
+    case TexturePreprocess::kHighPassEqualize:
+      return "highpass_equalize";
+    case TexturePreprocess::kWallis:
+      return "wallis";
+  }
+  return "?";
+}
+
+TexturePreprocess ParseTexturePreprocess(const std::string& name) {
+  for (TexturePreprocess p : {TexturePreprocess::kNone,
+                              TexturePreprocess::kHighPassEqualize,
+                              TexturePreprocess::kWallis}) {
+    if (name == TexturePreprocessName(p)) return p;
+  }
+  ThrowInputError("--preprocess: unknown '",
+                  name,
+                  "' (expected none, highpass_equalize or wallis)");
+}
+
+const char* TextureBlendName(TextureBlend blend) {
+  return blend == TextureBlend::kNone ? "none" : "view_dependent";
+}
+
+TextureBlend ParseTextureBlend(const std::string& name) {
+  if (name == "none") return TextureBlend::kNone;
+  if (name == "view_dependent") return TextureBlend::kViewDependent;
+  ThrowInputError(
+      "--blend: unknown '", name, "' (expected view_dependent or none)");
+}
+
+void TextureOptions::Check() const {
+  if (!(filter_radius_px >= 1)) {
+    ThrowInputError("--filter_radius_px must be at least 1");
+  }
+  if (!(texel_size >= 0)) ThrowInputError("--texel_size must not be negative");
+  if (max_atlas_size < 64) ThrowInputError("--max_atlas_size must be >= 64");
+  if (padding_px < 1) ThrowInputError("--padding_px must be at least 1");
+  if (!(min_view_angle_deg >= 0 && min_view_angle_deg < 90)) {
+    ThrowInputError("--min_view_angle_deg must lie in [0, 90)");
+  }
+  if (!(depth_tolerance > 0 && depth_tolerance < 1)) {
+    ThrowInputError("--depth_tolerance must lie in (0, 1)");
+  }
+}
+
+std::vector<TextureImage> LoadTextureImages(const Scene& scene,
+                                            const std::string& image_path,
+                                            const TextureOptions& options) {
+  options.Check();
+  std::vector<TextureImage> images;
+  for (const auto& [image_id, image] : scene.images) {
+    TextureImage t;
+    t.name = image.name;
+    t.camera = &scene.cameras.at(image.camera_id);
+    t.image = &image;
+    images.push_back(t);
+  }
+  if (images.empty()) ThrowInputError("the model has no images");
+  Progress progress("pre-processing", images.size(), "images");
+  ParallelFor(static_cast<int>(images.size()), options.num_threads, [&](int i) {
+    TextureImage& t = images[i];
+    const std::string path = image_path + "/" + t.name;
+    cv::Mat bgr = ReadImage(path, ImageReadMode::kColor);
+    if (bgr.depth() == CV_16U) {
+      bgr.convertTo(bgr, CV_8U, 1.0 / 257.0);
+    } else if (bgr.depth() != CV_8U) {
+      ThrowInputError(path, ": needs 8 or 16 bits per channel");
+    }
+    if (bgr.cols != static_cast<int>(t.camera->width) ||
+        bgr.rows != static_cast<int>(t.camera->height)) {
+      ThrowInputError(path,
+                      ": is ",
+                      bgr.cols,
+                      " x ",
+                      bgr.rows,
+                      " pixels but its camera is ",
+                      t.camera->width,
+                      " x ",
+                      t.camera->height);
+    }
+    switch (options.preprocess) {
+      case TexturePreprocess::kNone:
+        t.bgr = bgr;
+        break;
+      case TexturePreprocess::kHighPassEqualize:
+        t.bgr = HighPassEqualize(bgr, options.filter_radius_px);
+        break;
+      case TexturePreprocess::kWallis: {
+        WallisOptions wallis;
+        wallis.radius_px = options.filter_radius_px;
+        t.bgr = WallisFilter(bgr, wallis);
+        break;
+      }
+    }
+    progress.Add();
+  });
+  progress.Finish();
+  return images;
+}
+
+TexturedMesh MapTexture(const TriangleMesh& input,
+                        const std::vector<TextureImage>& images,
+                        const TextureOptions& options) {
+  options.Check();
+  if (input.NumFaces() == 0) ThrowInputError("the mesh has no faces");
+  if (images.empty()) ThrowInputError("no images to texture the mesh from");
+  TexturedMesh result;
+  result.mesh = input;
+  result.mesh.face_texcoords.clear();
+  const TriangleMesh& mesh = result.mesh;
+  TextureReport& report = result.report;
+  const int num_faces = static_cast<int>(mesh.NumFaces());
+  const int num_images = static_cast<int>(images.size());
+  report.num_images = num_images;
+  report.num_faces = num_faces;
+
+  // 2. Visibility and projected areas.
+  Timer timer;
+  std::vector<std::vector<FaceView>> views(num_faces);
+  {
+    MeshRenderer renderer(mesh);
+    Progress progress("visibility", images.size(), "images");
+    for (int j = 0; j < num_images; ++j) {
+      const std::vector<float> areas =
+          VisibleAreas(mesh, renderer, images[j], options);
+      for (int face = 0; face < num_faces; ++face) {
+        if (areas[face] > 0) views[face].push_back({j, areas[face]});
+      }
+      progress.Add();
+    }
+    progress.Finish();
+  }
+  report.seconds_visibility = timer.Seconds();
+  timer = Timer();
+
+  // 3. The optimal image of each face.
+  std::vector<int> best(num_faces, -1);
+  std::vector<float> best_area(num_faces, 0.0f);
+  size_t num_views = 0;
+  for (int face = 0; face < num_faces; ++face) {
+    for (const FaceView& v : views[face]) {
+      if (v.area_px > best_area[face]) {
+        best_area[face] = v.area_px;
+        best[face] = v.image;
+      }
+    }
+    num_views += views[face].size();
+    if (best[face] < 0) ++report.num_unseen_faces;
+  }
+  if (report.num_unseen_faces == num_faces) {
+    ThrowInputError(
+        "no photograph sees the mesh (check that the mesh and "
+        "the model share one coordinate system)");
+  }
+  report.mean_views_per_face = double(num_views) / num_faces;
+  for (int face = 0; face < num_faces; ++face) {
+    if (best[face] >= 0) ++report.faces_per_image[images[best[face]].name];
+  }
+
+  // Texel size: the median ground sampling distance of the faces in their
+  // optimal images, weighted by the faces' areas.
+  std::vector<double> face_area(num_faces);
+  for (int face = 0; face < num_faces; ++face) {
+    face_area[face] = TriangleArea3(mesh, face);
+  }
+  double texel_size = options.texel_size;
+  if (texel_size <= 0) {
+    std::vector<std::pair<double, double>> gsd;  // (gsd, weight)
+    double total = 0;
+    for (int face = 0; face < num_faces; ++face) {
+      if (best[face] < 0 || face_area[face] <= 0 || best_area[face] <= 0) {
+        continue;
+      }
+      gsd.emplace_back(std::sqrt(face_area[face] / best_area[face]),
+                       face_area[face]);
+      total += face_area[face];
+    }
+    std::sort(gsd.begin(), gsd.end());
+    double sum = 0;
+    for (const auto& [value, weight] : gsd) {
+      texel_size = value;
+      sum += weight;
+      if (sum >= 0.5 * total) break;
+    }
+  }
+
+  // 4. Charts: faces joined across edges where they share the optimal image.
+  const std::vector<EdgeFace> edges = SortedEdges(mesh);
+  std::vector<int> parent(num_faces);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (size_t i = 0; i + 1 < edges.size(); ++i) {
+    for (size_t k = i + 1; k < edges.size() && edges[k].SameEdge(edges[i]);
+         ++k) {
+      const int f = edges[i].face, g = edges[k].face;
+      if (best[f] >= 0 && best[f] == best[g]) {
+        parent[FindRoot(&parent, f)] = FindRoot(&parent, g);
+      }
+    }
+  }
+  std::vector<Chart> charts;
+  std::vector<int> chart_of_root(num_faces, -1);
+  Chart unseen;
+  for (int face = 0; face < num_faces; ++face) {
+    if (best[face] < 0) {
+      unseen.faces.push_back(face);
+      continue;
+    }
+    const int root = FindRoot(&parent, face);
+    if (chart_of_root[root] < 0) {
+      chart_of_root[root] = static_cast<int>(charts.size());
+      charts.emplace_back();
+      charts.back().image = best[face];
+    }
+    charts[chart_of_root[root]].faces.push_back(face);
+  }
+  report.num_charts = static_cast<int>(charts.size());
+
+  // Projected corners of every face in its optimal image.
+  std::vector<std::array<Eigen::Vector2d, 3>> corners(num_faces);
+  for (int face = 0; face < num_faces; ++face) {
+    if (best[face] >= 0) {
+      ProjectFace(mesh, face, images[best[face]], corners[face].data());
+    }
+  }
+  for (Chart& chart : charts) {
+    double px = 0, m2 = 0;
+    for (int face : chart.faces) {
+      px += best_area[face];
+      m2 += face_area[face];
+    }
+    chart.pixels_per_metre = m2 > 0 ? std::sqrt(px / m2) : 1.0;
+  }
+  // Scale each chart to the texel size, pack; a larger texel size when the
+  // atlas would exceed its largest side.
+  const int pad = options.padding_px;
+  cv::Size atlas_size;
+  for (int attempt = 0;; ++attempt) {
+    for (Chart& chart : charts) {
+      const double scale = 1.0 / (texel_size * chart.pixels_per_metre);
+      chart.min = Eigen::Vector2d::Constant(1e300);
+      chart.max = Eigen::Vector2d::Constant(-1e300);
+      for (int face : chart.faces) {
+        for (const Eigen::Vector2d& c : corners[face]) {
+          chart.min = chart.min.cwiseMin(scale * c);
+          chart.max = chart.max.cwiseMax(scale * c);
+        }
+      }
+      chart.width = static_cast<int>(std::ceil(chart.max.x() - chart.min.x())) +
+                    2 * pad + 1;
+      chart.height =
+          static_cast<int>(std::ceil(chart.max.y() - chart.min.y())) + 2 * pad +
+          1;
+    }
+    // The faces no photograph sees share one small block of unseen colour.
+    unseen.width = unseen.height = unseen.faces.empty() ? 0 : 2 * pad + 2;
+    if (!unseen.faces.empty()) charts.push_back(unseen);
+    atlas_size = PackCharts(&charts);
+    if (!unseen.faces.empty()) {
+      unseen = charts.back();
+      charts.pop_back();
+    }
+    const int side = std::max(atlas_size.width, atlas_size.height);
+    if (side <= options.max_atlas_size) break;
+    CHECK_LT(attempt, 20);
+    texel_size *= 1.02 * side / options.max_atlas_size;
+  }
+  report.texel_size = texel_size;
+  report.atlas_width = atlas_size.width;
+  report.atlas_height = atlas_size.height;
+
+  // Texture coordinates in atlas texels (x right, y down) per face corner.
+  std::vector<std::array<Eigen::Vector2d, 3>> texel(num_faces);
+  for (Chart& chart : charts) {
+    const double scale = 1.0 / (texel_size * chart.pixels_per_metre);
+    const Eigen::Vector2d shift =
+        chart.offset + Eigen::Vector2d::Constant(pad + 0.5) - chart.min;
+    for (int face : chart.faces) {
+      for (int k = 0; k < 3; ++k) {
+        texel[face][k] = scale * corners[face][k] + shift;
+      }
+    }
+  }
+  const Eigen::Vector2d unseen_center =
+      unseen.offset + Eigen::Vector2d::Constant(0.5 * unseen.width);
+  for (int face : unseen.faces) texel[face].fill(unseen_center);
+
+  // 5. Fill the atlas, chart by chart in parallel (charts own disjoint
+  // rectangles). Each face first writes the texels whose centres lie inside
+  // it, then those within a texel outside its edges that are still empty,
+  // so that bilinear lookups at chart borders find texture, not background.
+  cv::Mat atlas(atlas_size, CV_8UC3, cv::Scalar::all(0));
+  cv::Mat covered(atlas_size, CV_8U, cv::Scalar(0));
+  if (!unseen.faces.empty()) {
+    const cv::Rect block(static_cast<int>(unseen.offset.x()),
+                         static_cast<int>(unseen.offset.y()),
+                         unseen.width,
+                         unseen.height);
+    atlas(block).setTo(cv::Scalar(
+        options.unseen_bgr[0], options.unseen_bgr[1], options.unseen_bgr[2]));
+    covered(block).setTo(255);
+  }
+  Progress progress("atlas", charts.size(), "charts");
+  ParallelFor(static_cast<int>(charts.size()), options.num_threads, [&](int c) {
+    const Chart& chart = charts[c];
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int face : chart.faces) {
+        const auto& t = texel[face];
+        const Eigen::Vector2d e1 = t[1] - t[0], e2 = t[2] - t[0];
+        const double det = e1.x() * e2.y() - e1.y() * e2.x();
+        if (std::abs(det) < 1e-12) continue;
+        // Distance of a texel centre outside edge k, in texels, is
+        // -b_k * |det| / |edge opposite k|.
+        const double margin[3] = {
+            pass == 0 ? 0.0 : (t[2] - t[1]).norm() / std::abs(det),
+            pass == 0 ? 0.0 : (t[2] - t[0]).norm() / std::abs(det),
+            pass == 0 ? 0.0 : (t[1] - t[0]).norm() / std::abs(det)};
+        // The face's corners in every photograph that blends into it.
+        struct Source {
+          const cv::Mat* bgr;
+          Eigen::Vector2d p[3];
+          float weight;
+        };
+        std::vector<Source> sources;
+        for (const FaceView& v : views[face]) {
+          if (options.blend == TextureBlend::kNone && v.image != best[face]) {
+            continue;
+          }
+          Source s;
+          s.bgr = &images[v.image].bgr;
+          if (!ProjectFace(mesh, face, images[v.image], s.p)) continue;
+          s.weight = v.area_px / best_area[face];
+          sources.push_back(s);
+        }
+        const int x0 = std::max(
+            0,
+            static_cast<int>(
+                std::floor(std::min({t[0].x(), t[1].x(), t[2].x()}) - 1.0)));
+        const int y0 = std::max(
+            0,
+            static_cast<int>(
+                std::floor(std::min({t[0].y(), t[1].y(), t[2].y()}) - 1.0)));
+        const int x1 = std::min(
+            atlas.cols - 1,
+            static_cast<int>(
+                std::ceil(std::max({t[0].x(), t[1].x(), t[2].x()}) + 1.0)));
+        const int y1 = std::min(
+            atlas.rows - 1,
+            static_cast<int>(
+                std::ceil(std::max({t[0].y(), t[1].y(), t[2].y()}) + 1.0)));
+        for (int y = y0; y <= y1; ++y) {
+          for (int x = x0; x <= x1; ++x) {
+            const Eigen::Vector2d d = Eigen::Vector2d(x + 0.5, y + 0.5) - t[0];
+            const double b1 = (d.x() * e2.y() - d.y() * e2.x()) / det;
+            const double b2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
+            const double b0 = 1.0 - b1 - b2;
+            if (b0 < -margin[0] || b1 < -margin[1] || b2 < -margin[2]) {
+              continue;
+            }
+            uint8_t& mark = covered.at<uint8_t>(y, x);
+            if (pass == 1 && mark) continue;
+            // The affine map fixed by the three corners carries the
+            // texel into each photograph (equations 6 and 7).
+            Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+            float weight = 0;
+            for (const Source& s : sources) {
+              Eigen::Vector3f color;
+              if (SampleColor(*s.bgr,
+                              b0 * s.p[0] + b1 * s.p[1] + b2 * s.p[2],
+                              &color)) {
+                sum += s.weight * color;
+                weight += s.weight;
+              }
+            }
+            cv::Vec3b& out = atlas.at<cv::Vec3b>(y, x);
+            if (weight > 0) {
+              for (int ch = 0; ch < 3; ++ch) {
+                out[ch] = cv::saturate_cast<uint8_t>(sum[ch] / weight);
+              }
+            } else {
+              out = options.unseen_bgr;
+            }
+            mark = 255;
+          }
+        }
+      }
+    }
+    progress.Add();
+  });
+  progress.Finish();
+  report.atlas_fill =
+      double(cv::countNonZero(covered)) / (double(atlas.cols) * atlas.rows);
+  DilateAtlas(pad, &atlas, &covered);
+
+  result.mesh.face_texcoords.resize(num_faces);
+  for (int face = 0; face < num_faces; ++face) {
+    for (int k = 0; k < 3; ++k) {
+      result.mesh.face_texcoords[face][k] = Eigen::Vector2f(
+          static_cast<float>(texel[face][k].x() / atlas.cols),
+          static_cast<float>(1.0 - texel[face][k].y() / atlas.rows));
+    }
+  }
+
+  // The seam measure: the atlas at each chart-border edge's midpoint, seen
+  // from both sides.
+  double seam_sum = 0;
+  for (size_t i = 0; i + 1 < edges.size(); ++i) {
+    const EdgeFace& e = edges[i];
+    const EdgeFace& o = edges[i + 1];
+    if (!e.SameEdge(o) || (i + 2 < edges.size() && edges[i + 2].SameEdge(e))) {
+      continue;  // a boundary or non-manifold edge
+    }
+    if (i > 0 && edges[i - 1].SameEdge(e)) continue;
+    if (best[e.face] < 0 || best[o.face] < 0 || best[e.face] == best[o.face]) {
+      continue;
+    }
+    auto midpoint = [&](int face) {
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const int v = mesh.faces[face][k];
+        if (v == e.a || v == e.b) sum += texel[face][k];
+      }
+      return Eigen::Vector2d(0.5 * sum);
+    };
+    Eigen::Vector3f a, b;
+    if (!SampleColor(atlas, midpoint(e.face), &a) ||
+        !SampleColor(atlas, midpoint(o.face), &b)) {
+      continue;
+    }
+    seam_sum += (a - b).cwiseAbs().mean();
+    ++report.num_seam_edges;
+  }
+  report.seam_difference =
+      report.num_seam_edges > 0 ? seam_sum / report.num_seam_edges : 0.0;
+  report.seconds_atlas = timer.Seconds();
+  result.atlas = atlas;
+  return result;
+}
+
+std::string TextureSummary(const TextureReport& r) {
+  std::ostringstream out;
+  out.precision(4);
+  out << r.num_faces << " faces from " << r.num_images << " images ("
+      << r.mean_views_per_face << " views per face, " << r.num_unseen_faces
+      << " unseen), " << r.num_charts << " charts in a " << r.atlas_width
+      << " x " << r.atlas_height << " atlas (texel " << r.texel_size * 1000
+      << " mm, " << 100 * r.atlas_fill
+      << " % filled); seams: " << r.num_seam_edges << " edges, mean difference "
+      << r.seam_difference << " grey levels; "
+      << r.seconds_preprocess + r.seconds_visibility + r.seconds_atlas << " s";
+  return out.str();
+}
+
+}  // namespace bayon
