@@ -36,12 +36,12 @@ struct ViewerOptions {
   std::string up_axis = "y";
   double azimuth_deg = 30;    // first view, from the up axis' e1 towards e2
   double elevation_deg = 20;  // above the horizontal
-  double fov_deg = 40;        // vertical field of view
+  double fov_deg = 40;        // horizontal field of view, as bayon render
 
   void Check() const {
-    CheckOption(elevation_deg >= -90 && elevation_deg <= 90,
+    CheckOption(elevation_deg >= -89 && elevation_deg <= 89,
                 "--elevation_deg",
-                "in [-90, 90]",
+                "in [-89, 89]",
                 elevation_deg);
     CheckOption(
         fov_deg > 1 && fov_deg < 170, "--fov_deg", "in (1, 170)", fov_deg);
@@ -225,7 +225,9 @@ int RunViewer(int argc, char** argv) {
       "shaded, wireframe and red-cyan anaglyph modes (buttons or keys 1-4). "
       "The model and the script are inside the page, so it works offline, "
       "from the file system or any static server. URL parameters ?mode=, "
-      "&azimuth=, &elevation=, &fov= override the first view.");
+      "&azimuth=, &elevation=, &fov= override the first view, which is "
+      "framed as bayon render's orbit views: --azimuth_deg=-90 "
+      "--elevation_deg=20 --fov_deg=40 in a 4:3 window shows its view 000.");
   CLI::App& app = command.app();
   app.add_option("--model_path", model_path, "Textured model (.glb)")
       ->required();
@@ -248,7 +250,9 @@ int RunViewer(int argc, char** argv) {
   app.add_option("--elevation_deg",
                  options.elevation_deg,
                  "First view: elevation above the horizontal");
-  app.add_option("--fov_deg", options.fov_deg, "Vertical field of view");
+  app.add_option("--fov_deg",
+                 options.fov_deg,
+                 "First view: horizontal field of view (as bayon render)");
   app.add_option("--overwrite", overwrite, "Replace an existing output folder");
   app.add_option("--log_path",
                  log_path,

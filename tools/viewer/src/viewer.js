@@ -11,7 +11,13 @@
 //   <script type="application/json" id="bayon-viewer-config">  options
 //   <script type="application/octet-stream" id="bayon-model">   base64 .glb
 // URL parameters override the options: ?mode=textured|shaded|wireframe|
-// anaglyph, &azimuth=deg, &elevation=deg, &fov=deg.
+// anaglyph, &azimuth=deg, &elevation=deg, &fov=deg. The first view follows
+// bayon render's orbit views (ext/render/views.h): it looks at the centre of
+// the model's bounding box from `azimuth` (counter-clockwise seen from above,
+// from the datum's x axis) and `elevation` (above the horizontal), `fov` is
+// the horizontal field of view, and the distance is the smallest at which
+// every vertex lies inside the share FILL of the window; so ?azimuth=-90&
+// elevation=20&fov=40 in a 4:3 window shows what render's view 000 shows.
 //
 // For tests and scripts the state is on <body> (data-status = loading | ready
 // | error, data-error, data-mode, data-vertices, data-faces, data-errors = the
@@ -25,8 +31,9 @@ const MODES = ['textured', 'shaded', 'wireframe', 'anaglyph'];
 const BACKGROUND = 0x262a31;
 const SHADED_GREY = 0xbdbdbd;
 const WIRE_COLOUR = 0xe8ecf2;
-// Room around the model's bounding sphere in the first view.
-const FRAME_MARGIN = 1.15;
+// Share of the window the model fills in its tighter direction in the first
+// view, as bayon render's orbit views (OrbitOptions::fill).
+const FILL = 0.8;
 
 const body = document.body;
 let numConsoleErrors = 0;
@@ -222,7 +229,17 @@ function main() {
   const scene = new THREE.Scene();
   const [e1, e2, up] = viewFrame(config.upAxis);
   const camera = new THREE.PerspectiveCamera(
-      config.fovDeg, window.innerWidth / window.innerHeight, 0.01, 1000);
+      40, window.innerWidth / window.innerHeight, 0.01, 1000);
+  // Keeps the horizontal field of view (bayon render's convention) whatever
+  // the window's shape.
+  function setAspect(aspect) {
+    const horizontal = THREE.MathUtils.degToRad(config.fovDeg);
+    camera.aspect = aspect;
+    camera.fov = THREE.MathUtils.radToDeg(
+        2 * Math.atan(Math.tan(horizontal / 2) / aspect));
+    camera.updateProjectionMatrix();
+  }
+  setAspect(window.innerWidth / window.innerHeight);
   camera.up.copy(up);
   scene.add(camera);
   // A headlight from above left of the viewer, and some ambient light, for
@@ -239,7 +256,15 @@ function main() {
 
   let meshes = [];
   let mode = config.mode;
-  let radius = 1;
+  let points = [];  // the model's vertices in the scene's frame
+  let centre = null;  // of their bounding box
+  // Until the user moves the camera, a resized window is framed anew (the
+  // first view is then the same at any window size; headless browsers also
+  // resize the page before they take a screenshot).
+  let userMoved = false;
+  controls.addEventListener('start', () => {
+    userMoved = true;
+  });
 
   function draw() {
     if (mode === 'anaglyph') {
@@ -269,23 +294,45 @@ function main() {
     draw();
   }
 
-  // Frames the model's bounding sphere from (azimuth, elevation) around its
-  // centre so that it fills the narrower of the two fields of view.
+  // Looks at `centre` from (azimuth, elevation) at the smallest distance at
+  // which every vertex lies inside the share FILL of the window: a point p
+  // (relative to the centre, in camera axes x right, y up, z towards the
+  // camera) at camera distance d is inside when |p.x| <= tan_x (d - p.z)
+  // and |p.y| <= tan_y (d - p.z).
   function setView(azimuthDeg, elevationDeg, centre) {
     const az = THREE.MathUtils.degToRad(azimuthDeg);
     const el = THREE.MathUtils.degToRad(elevationDeg);
-    const vertical = THREE.MathUtils.degToRad(camera.fov);
-    const horizontal = 2 * Math.atan(Math.tan(vertical / 2) * camera.aspect);
-    const distance =
-        FRAME_MARGIN * radius / Math.sin(Math.min(vertical, horizontal) / 2);
+    const tanY = FILL * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2);
+    const tanX = tanY * camera.aspect;
     const direction = new THREE.Vector3()
                           .addScaledVector(e1, Math.cos(el) * Math.cos(az))
                           .addScaledVector(e2, Math.cos(el) * Math.sin(az))
                           .addScaledVector(up, Math.sin(el));
+    camera.position.copy(centre).add(direction);
+    camera.lookAt(centre);
+    camera.updateMatrixWorld();
+    const [xAxis, yAxis, zAxis] = [new THREE.Vector3(), new THREE.Vector3(),
+                                   new THREE.Vector3()];
+    camera.matrixWorld.extractBasis(xAxis, yAxis, zAxis);
+    let distance = 0;
+    let extent = 0;
+    const p = new THREE.Vector3();
+    for (const point of points) {
+      p.subVectors(point, centre);
+      const z = p.dot(zAxis);
+      distance = Math.max(distance,
+                          Math.abs(p.dot(xAxis)) / tanX + z,
+                          Math.abs(p.dot(yAxis)) / tanY + z);
+      extent = Math.max(extent, p.length());
+    }
+    // Flat models seen edge-on: keep some distance.
+    distance = Math.max(distance, 1e-3 * (2 * extent + 1e-9));
     controls.target.copy(centre);
     camera.position.copy(centre).addScaledVector(direction, distance);
-    camera.near = distance / 100;
-    camera.far = distance * 100;
+    // Depth range for zooming in and out from here.
+    camera.near = distance / 1000;
+    camera.far = 100 * distance + 2 * extent;
+    controls.maxDistance = 50 * distance;
     camera.updateProjectionMatrix();
     controls.update();
   }
@@ -295,6 +342,7 @@ function main() {
     mode: () => mode,
     setMode,
     setView: (az, el) => {
+      userMoved = true;
       setView(az, el, controls.target.clone());
       draw();
     },
@@ -311,10 +359,19 @@ function main() {
       fail('the model has no meshes');
       return;
     }
-    const sphere = new THREE.Box3().setFromObject(root)
-                       .getBoundingSphere(new THREE.Sphere());
-    radius = sphere.radius > 0 ? sphere.radius : 1;
-    setView(config.azimuthDeg, config.elevationDeg, sphere.center);
+    root.updateMatrixWorld(true);
+    const box = new THREE.Box3();
+    for (const { object } of meshes) {
+      const position = object.geometry.attributes.position;
+      for (let i = 0; i < position.count; ++i) {
+        const point = new THREE.Vector3().fromBufferAttribute(position, i)
+                          .applyMatrix4(object.matrixWorld);
+        points.push(point);
+        box.expandByPoint(point);
+      }
+    }
+    centre = box.getCenter(new THREE.Vector3());
+    setView(config.azimuthDeg, config.elevationDeg, centre);
     controls.addEventListener('change', draw);
 
     const { vertices, faces } = countElements(meshes);
@@ -337,8 +394,10 @@ function main() {
     if (index >= 0 && index < MODES.length) setMode(MODES[index]);
   });
   window.addEventListener('resize', () => {
-    camera.aspect = window.innerWidth / window.innerHeight;
-    camera.updateProjectionMatrix();
+    setAspect(window.innerWidth / window.innerHeight);
+    if (centre && !userMoved) {
+      setView(config.azimuthDeg, config.elevationDeg, centre);
+    }
     renderer.setSize(window.innerWidth, window.innerHeight);
     anaglyph.setSize(window.innerWidth, window.innerHeight);
     draw();
