@@ -8,6 +8,8 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/render/model_export.h"
+#include "ext/render/model_views.h"
+#include "ext/render/views.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -18,6 +20,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <regex>
 #include <sstream>
@@ -403,6 +406,80 @@ TEST_F(ViewerTest, ChromiumDrawsEveryMode) {
           << a->first << " vs " << b->first;
     }
   }
+}
+
+TEST_F(ViewerTest, ChromiumMatchesARenderOrbitView) {
+  const std::string chromium = FindChromium();
+  if (chromium.empty()) {
+    GTEST_SKIP() << "chromium not installed (scripts/setup.sh installs it; "
+                    "or set BAYON_CHROMIUM)";
+  }
+  // bayon render's textured orbit view (the library calls the command makes)
+  // and the page in a window of the same size with the same view.
+  const TexturedModel box = ColouredBox();
+  OrbitOptions orbit;
+  orbit.num_views = 1;
+  orbit.start_azimuth_deg = 30;
+  orbit.elevation_deg = 20;
+  orbit.fov_deg = 40;
+  orbit.width = 640;
+  orbit.height = 480;
+  ModelRenderOptions render_options;
+  render_options.modes = {RenderMode::kTextured};
+  cv::Mat render_rgb;
+  RenderModelViews(box,
+                   OrbitViewpoints(box.mesh.vertices.positions, orbit),
+                   render_options,
+                   [&](const std::string& name, const cv::Mat& bgr) {
+                     cv::imwrite(dir_ + "/render_" + name, bgr);
+                     cv::cvtColor(bgr, render_rgb, cv::COLOR_BGR2RGB);
+                   });
+  ASSERT_EQ(render_rgb.size(), cv::Size(640, 480));
+
+  const std::string out = dir_ + "/viewer";
+  ASSERT_EQ(
+      RunBayon({"viewer", "--model_path", glb_path_, "--output_path", out})
+          .exit_code,
+      0);
+  const PageRun run = OpenPage(chromium,
+                               out + "/index.html",
+                               "?mode=textured&azimuth=30&elevation=20&fov=40",
+                               dir_,
+                               "viewer");
+  ASSERT_FALSE(run.rgb.empty());
+  ASSERT_EQ(Attribute(run.body_tag, "data-status"), "ready") << run.body_tag;
+
+  // The same silhouette (render's background is white, the page's dark)...
+  const cv::Mat page = Canvas(run.rgb), render = Canvas(render_rgb);
+  const cv::Mat page_mask = ModelMask(page);
+  cv::Mat render_mask(render.size(), CV_8U);
+  for (int y = 0; y < render.rows; ++y) {
+    for (int x = 0; x < render.cols; ++x) {
+      render_mask.at<uint8_t>(y, x) =
+          ColourDistance(render.at<cv::Vec3b>(y, x), {255, 255, 255}) > 30 ? 255
+                                                                           : 0;
+    }
+  }
+  cv::Mat both, either;
+  cv::bitwise_and(page_mask, render_mask, both);
+  cv::bitwise_or(page_mask, render_mask, either);
+  ASSERT_GT(cv::countNonZero(either), 0);
+  const double iou = double(cv::countNonZero(both)) / cv::countNonZero(either);
+  EXPECT_GT(iou, 0.95) << "page " << cv::countNonZero(page_mask)
+                       << " px, render " << cv::countNonZero(render_mask)
+                       << " px";
+  // ... in the same colours where both draw the model (edges aside).
+  cv::Mat inner;
+  cv::erode(both, inner, cv::Mat::ones(5, 5, CV_8U));
+  ASSERT_GT(cv::countNonZero(inner), 0);
+  cv::Mat diff;
+  cv::absdiff(page, render, diff);
+  const cv::Scalar mean = cv::mean(diff, inner);
+  std::cout << "page vs render: silhouette IoU " << iou
+            << ", mean colour difference (RGB) " << mean[0] << " " << mean[1]
+            << " " << mean[2] << std::endl;
+  EXPECT_LT((mean[0] + mean[1] + mean[2]) / 3, 6)
+      << "mean colour difference " << mean;
 }
 
 TEST_F(ViewerTest, ChromiumReportsBadUrlParameters) {
