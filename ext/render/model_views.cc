@@ -81,6 +81,12 @@ class ModelViewRenderer {
       Lighting lighting;
       lighting.enabled = true;
       lighting.sun_direction = sun;
+      // Neutral white light, and more sky than outdoors, so that faces
+      // turned from the sun keep their form instead of going black.
+      lighting.sun_intensity = 0.8;
+      lighting.ambient_intensity = 0.55;
+      lighting.sun_bgr = Eigen::Vector3f::Ones();
+      lighting.ambient_bgr = Eigen::Vector3f::Ones();
       RenderOptions render_options = base_;
       render_options.supersampling = 1;
       render_options.geometry_buffers = wireframe;

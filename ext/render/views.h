@@ -38,7 +38,7 @@ struct OrbitOptions {
   double elevation_deg = 20;
   // Azimuth of the first camera, counter-clockwise seen from above from the
   // horizontal axis nearest to the world's x axis (degrees).
-  double start_azimuth_deg = -90;
+  double start_azimuth_deg = -60;
   int width = 1024;  // pixels
   int height = 768;
   // Horizontal field of view (degrees); the focal length follows.
