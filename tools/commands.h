@@ -26,6 +26,7 @@ int RunDisparity(int argc, char** argv);
 int RunTiePoints(int argc, char** argv);
 int RunRefineKeypoints(int argc, char** argv);
 int RunRender(int argc, char** argv);
+int RunTexture(int argc, char** argv);
 int RunViewer(int argc, char** argv);
 
 }  // namespace bayon

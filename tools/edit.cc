@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+
 namespace bayon {
 namespace {
 
@@ -130,6 +132,8 @@ int RunEdit(int argc, char** argv) {
   }
   PlyWriteOptions write_options;
   write_options.comment = "bayon edit --method " + method_name;
+  std::filesystem::create_directories(
+      std::filesystem::absolute(output_path).parent_path());
   WritePointCloudPly(edited, output_path, write_options);
   if (!removed_path.empty()) {
     PointCloud removed = cloud;

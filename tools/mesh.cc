@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <sstream>
 
 namespace bayon {
@@ -222,6 +223,8 @@ int RunMesh(int argc, char** argv) {
   const PointCloud cloud = ReadPointCloudPly(input_path);
   MeshReport report;
   const TriangleMesh mesh = MeshPointCloud(cloud, options, &report, input_path);
+  std::filesystem::create_directories(
+      std::filesystem::absolute(output_path).parent_path());
   WriteMesh(mesh, output_path);
   if (!report_path.empty()) {
     WriteFileAtomically(

@@ -5,6 +5,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <vector>
 
 namespace bayon {
@@ -20,17 +21,37 @@ void CheckInput(const cv::Mat& image, double radius_px, const char* what) {
   }
 }
 
-// Gaussian low pass of sigma `radius_px`. A kernel of +-3 sigma reaches far
-// past small images; OpenCV reflects at the border, which keeps the mean
-// level there.
+// Gaussian low pass of sigma `radius_px` (CV_32F). OpenCV reflects at the
+// border, which keeps the mean level there. A wide kernel is computed on
+// the image shrunk by radius / 8 (area averaging) and enlarged back
+// bilinearly: what a sigma of 50 px keeps varies over tens of pixels, so the
+// shortcut changes nothing visible, and a 6-megapixel photograph takes a
+// fraction of a second instead of ten.
 cv::Mat LowPass(const cv::Mat& channel, double radius_px) {
+  const int factor = std::max(1, static_cast<int>(radius_px / 8.0));
   cv::Mat low;
-  cv::GaussianBlur(channel,
-                   low,
-                   cv::Size(0, 0),
-                   radius_px,
-                   radius_px,
-                   cv::BORDER_REFLECT101);
+  if (factor == 1) {
+    cv::GaussianBlur(channel,
+                     low,
+                     cv::Size(0, 0),
+                     radius_px,
+                     radius_px,
+                     cv::BORDER_REFLECT101);
+    return low;
+  }
+  cv::Mat small;
+  cv::resize(channel,
+             small,
+             cv::Size(std::max(1, channel.cols / factor),
+                      std::max(1, channel.rows / factor)),
+             0,
+             0,
+             cv::INTER_AREA);
+  const double sigma_x = radius_px * small.cols / channel.cols;
+  const double sigma_y = radius_px * small.rows / channel.rows;
+  cv::GaussianBlur(
+      small, small, cv::Size(0, 0), sigma_x, sigma_y, cv::BORDER_REFLECT101);
+  cv::resize(small, low, channel.size(), 0, 0, cv::INTER_LINEAR);
   return low;
 }
 

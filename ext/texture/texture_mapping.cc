@@ -300,6 +300,9 @@ void TextureOptions::Check() const {
     ThrowInputError("--filter_radius_px must be at least 1");
   }
   if (!(texel_size >= 0)) ThrowInputError("--texel_size must not be negative");
+  if (!(chart_merge_ratio > 0 && chart_merge_ratio <= 1)) {
+    ThrowInputError("--chart_merge_ratio must lie in (0, 1]");
+  }
   if (max_atlas_size < 64) ThrowInputError("--max_atlas_size must be >= 64");
   if (padding_px < 1) ThrowInputError("--padding_px must be at least 1");
   if (!(min_view_angle_deg >= 0 && min_view_angle_deg < 90)) {
@@ -420,8 +423,64 @@ TexturedMesh MapTexture(const TriangleMesh& input,
         "the model share one coordinate system)");
   }
   report.mean_views_per_face = double(num_views) / num_faces;
+
+  // The image each face's texture is drawn in (its chart): the optimal one,
+  // except where most of its edge neighbours use another image that sees
+  // the face nearly as large; that merges the speckle of single faces whose
+  // optimal image differs from their neighbours' by a few per cent of area
+  // into larger charts (fewer seams, a fuller atlas).
+  const std::vector<EdgeFace> edges = SortedEdges(mesh);
+  std::vector<int> source = best;
+  std::vector<float> source_area = best_area;
+  if (options.chart_merge_ratio < 1) {
+    std::vector<std::array<int, 3>> neighbors(num_faces, {-1, -1, -1});
+    for (size_t i = 0; i + 1 < edges.size(); ++i) {
+      if (!edges[i].SameEdge(edges[i + 1]) ||
+          (i > 0 && edges[i - 1].SameEdge(edges[i])) ||
+          (i + 2 < edges.size() && edges[i + 2].SameEdge(edges[i]))) {
+        continue;  // boundary or non-manifold
+      }
+      for (const auto& [f, g] :
+           {std::make_pair(edges[i].face, edges[i + 1].face),
+            std::make_pair(edges[i + 1].face, edges[i].face)}) {
+        for (int& slot : neighbors[f]) {
+          if (slot < 0) {
+            slot = g;
+            break;
+          }
+        }
+      }
+    }
+    for (int iteration = 0; iteration < 5; ++iteration) {
+      int changed = 0;
+      for (int face = 0; face < num_faces; ++face) {
+        if (source[face] < 0) continue;
+        const auto& n = neighbors[face];
+        for (int k = 0; k < 3; ++k) {
+          if (n[k] < 0 || source[n[k]] < 0 || source[n[k]] == source[face]) {
+            continue;
+          }
+          const int label = source[n[k]];
+          int votes = 0;
+          for (int m = 0; m < 3; ++m)
+            votes += n[m] >= 0 && source[n[m]] == label;
+          if (votes < 2) continue;
+          for (const FaceView& v : views[face]) {
+            if (v.image == label &&
+                v.area_px >= options.chart_merge_ratio * best_area[face]) {
+              source[face] = label;
+              source_area[face] = v.area_px;
+              ++changed;
+            }
+          }
+          break;
+        }
+      }
+      if (changed == 0) break;
+    }
+  }
   for (int face = 0; face < num_faces; ++face) {
-    if (best[face] >= 0) ++report.faces_per_image[images[best[face]].name];
+    if (source[face] >= 0) ++report.faces_per_image[images[source[face]].name];
   }
 
   // Texel size: the median ground sampling distance of the faces in their
@@ -435,10 +494,10 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     std::vector<std::pair<double, double>> gsd;  // (gsd, weight)
     double total = 0;
     for (int face = 0; face < num_faces; ++face) {
-      if (best[face] < 0 || face_area[face] <= 0 || best_area[face] <= 0) {
+      if (source[face] < 0 || face_area[face] <= 0 || source_area[face] <= 0) {
         continue;
       }
-      gsd.emplace_back(std::sqrt(face_area[face] / best_area[face]),
+      gsd.emplace_back(std::sqrt(face_area[face] / source_area[face]),
                        face_area[face]);
       total += face_area[face];
     }
@@ -452,14 +511,13 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   }
 
   // 4. Charts: faces joined across edges where they share the optimal image.
-  const std::vector<EdgeFace> edges = SortedEdges(mesh);
   std::vector<int> parent(num_faces);
   std::iota(parent.begin(), parent.end(), 0);
   for (size_t i = 0; i + 1 < edges.size(); ++i) {
     for (size_t k = i + 1; k < edges.size() && edges[k].SameEdge(edges[i]);
          ++k) {
       const int f = edges[i].face, g = edges[k].face;
-      if (best[f] >= 0 && best[f] == best[g]) {
+      if (source[f] >= 0 && source[f] == source[g]) {
         parent[FindRoot(&parent, f)] = FindRoot(&parent, g);
       }
     }
@@ -468,7 +526,7 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   std::vector<int> chart_of_root(num_faces, -1);
   Chart unseen;
   for (int face = 0; face < num_faces; ++face) {
-    if (best[face] < 0) {
+    if (source[face] < 0) {
       unseen.faces.push_back(face);
       continue;
     }
@@ -476,7 +534,7 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     if (chart_of_root[root] < 0) {
       chart_of_root[root] = static_cast<int>(charts.size());
       charts.emplace_back();
-      charts.back().image = best[face];
+      charts.back().image = source[face];
     }
     charts[chart_of_root[root]].faces.push_back(face);
   }
@@ -485,14 +543,14 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   // Projected corners of every face in its optimal image.
   std::vector<std::array<Eigen::Vector2d, 3>> corners(num_faces);
   for (int face = 0; face < num_faces; ++face) {
-    if (best[face] >= 0) {
-      ProjectFace(mesh, face, images[best[face]], corners[face].data());
+    if (source[face] >= 0) {
+      ProjectFace(mesh, face, images[source[face]], corners[face].data());
     }
   }
   for (Chart& chart : charts) {
     double px = 0, m2 = 0;
     for (int face : chart.faces) {
-      px += best_area[face];
+      px += source_area[face];
       m2 += face_area[face];
     }
     chart.pixels_per_metre = m2 > 0 ? std::sqrt(px / m2) : 1.0;
@@ -589,7 +647,7 @@ TexturedMesh MapTexture(const TriangleMesh& input,
         };
         std::vector<Source> sources;
         for (const FaceView& v : views[face]) {
-          if (options.blend == TextureBlend::kNone && v.image != best[face]) {
+          if (options.blend == TextureBlend::kNone && v.image != source[face]) {
             continue;
           }
           Source s;
@@ -677,7 +735,8 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       continue;  // a boundary or non-manifold edge
     }
     if (i > 0 && edges[i - 1].SameEdge(e)) continue;
-    if (best[e.face] < 0 || best[o.face] < 0 || best[e.face] == best[o.face]) {
+    if (source[e.face] < 0 || source[o.face] < 0 ||
+        source[e.face] == source[o.face]) {
       continue;
     }
     auto midpoint = [&](int face) {

@@ -16,12 +16,14 @@
 //    the face's plane) count as unseen.
 // 3. For each triangle its geometrically optimal image: the one where its
 //    projected area is largest.
-// 4. Charts: the connected sets of triangles sharing an optimal image. A
-//    chart's texture coordinates are its projection into that image, scaled
-//    to the atlas's texel size, so every texel of the optimal image is kept
-//    where the texel size allows; charts are packed into one atlas (shelves,
-//    tallest first) with `padding_px` texels between them, filled outwards
-//    from each chart against bleeding under mip-mapping.
+// 4. Charts: the connected sets of triangles drawn in one image: their
+//    optimal image, or (`chart_merge_ratio`) the image of most of their
+//    edge neighbours where that sees them nearly as large. A chart's
+//    texture coordinates are its projection into that image, scaled to the
+//    atlas's texel size, so every texel of the image is kept where the
+//    texel size allows; charts are packed into one atlas (shelves, tallest
+//    first) with `padding_px` texels between them, filled outwards from
+//    each chart against bleeding under mip-mapping.
 // 5. Texture weighted averaging (equations 6 and 7): every texel of a
 //    triangle takes the weighted mean of all photographs that see the
 //    triangle, weights area_j / area_max; the position in photograph j is
@@ -65,6 +67,10 @@ struct TextureOptions {
   // High-pass radius and Wallis window (Gaussian sigma), pixels.
   double filter_radius_px = 50;
   TextureBlend blend = TextureBlend::kViewDependent;
+  // A face is drawn in the image most of its edge neighbours are drawn in
+  // when that image sees it with at least this share of its largest
+  // projected area (fewer, larger charts); 1: always its optimal image.
+  double chart_merge_ratio = 0.7;
   // Atlas texel size in metres; 0: the median GSD of the optimal images.
   double texel_size = 0;
   // Largest atlas side; a larger atlas gets a coarser texel size.

@@ -1,0 +1,195 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/colmap/calibration_json.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/core/progress.h"
+#include "ext/mesh/mesh_io.h"
+#include "ext/render/model_export.h"
+#include "ext/texture/texture_mapping.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+namespace {
+
+nlohmann::ordered_json ReportToJson(const TextureReport& r,
+                                    const TextureOptions& options,
+                                    const std::string& mesh_path,
+                                    const std::vector<std::string>& files) {
+  nlohmann::ordered_json json;
+  json["mesh_path"] = mesh_path;
+  json["preprocess"] = TexturePreprocessName(options.preprocess);
+  json["filter_radius_px"] = options.filter_radius_px;
+  json["blend"] = TextureBlendName(options.blend);
+  json["num_images"] = r.num_images;
+  json["num_faces"] = r.num_faces;
+  json["num_unseen_faces"] = r.num_unseen_faces;
+  json["mean_views_per_face"] = r.mean_views_per_face;
+  json["num_charts"] = r.num_charts;
+  json["atlas_width"] = r.atlas_width;
+  json["atlas_height"] = r.atlas_height;
+  json["texel_size"] = r.texel_size;
+  json["atlas_fill"] = r.atlas_fill;
+  json["num_seam_edges"] = r.num_seam_edges;
+  json["seam_difference"] = r.seam_difference;
+  json["faces_per_image"] = r.faces_per_image;
+  json["seconds"] = {{"preprocess", r.seconds_preprocess},
+                     {"visibility", r.seconds_visibility},
+                     {"atlas", r.seconds_atlas}};
+  json["files"] = files;
+  return json;
+}
+
+}  // namespace
+
+int RunTexture(int argc, char** argv) {
+  std::string workspace_path, image_path, input_path, database_path;
+  std::string mesh_path, output_path, log_path,
+      preprocess = "highpass_equalize", blend = "view_dependent";
+  std::vector<std::string> formats = {"obj", "ply", "wrl", "glb"};
+  TextureOptions options;
+  ModelExportOptions export_options;
+  CommandLine command(
+      "texture",
+      "View-dependent texture mapping (the Bayon paper's sec. 3.5): the "
+      "photographs pre-processed (high pass and histogram equalisation per "
+      "channel, or Wallis), every triangle's visibility in every photograph, "
+      "its geometrically optimal image (largest projected area), and the "
+      "texture averaged over all photographs that see it with weights "
+      "area_j / area_max, each transformed affinely into the optimal image's "
+      "geometry. Writes a texture atlas (PNG) with the model as OBJ + MTL, "
+      "PLY, VRML 2.0 and glTF binary, and texture.json.");
+  CLI::App& app = command.app();
+  app.add_option("--workspace_path",
+                 workspace_path,
+                 "Workspace: defaults images/, sparse/adjusted, database.db, "
+                 "mesh/mesh.ply and model/ under it");
+  app.add_option("--image_path", image_path, "Folder of the images");
+  app.add_option("--input_path", input_path, "Oriented sparse model");
+  app.add_option("--database_path",
+                 database_path,
+                 "COLMAP database with bayon_interior (scanned frames); "
+                 "optional");
+  app.add_option("--mesh_path", mesh_path, "Mesh to texture (PLY, OBJ, OFF)");
+  app.add_option("--output_path", output_path, "Folder of the textured model");
+  app.add_option("--stem", export_options.stem, "File name of the model files");
+  app.add_option("--formats", formats, "Model formats: obj, ply, wrl, glb")
+      ->delimiter(',');
+  app.add_option("--preprocess",
+                 preprocess,
+                 "Radiometric pre-processing: highpass_equalize, wallis, none");
+  app.add_option("--filter_radius_px",
+                 options.filter_radius_px,
+                 "High-pass radius / Wallis window (Gaussian sigma), px");
+  app.add_option("--blend",
+                 blend,
+                 "view_dependent (weighted by projected area) or none (the "
+                 "optimal image alone)");
+  app.add_option("--chart_merge_ratio",
+                 options.chart_merge_ratio,
+                 "A face joins its neighbours' image when that sees it with "
+                 "at least this share of its largest area (1: always the "
+                 "optimal image)");
+  app.add_option("--texel_size",
+                 options.texel_size,
+                 "Atlas texel size, metres (0: median GSD of the optimal "
+                 "images)");
+  app.add_option(
+      "--max_atlas_size", options.max_atlas_size, "Largest atlas side");
+  app.add_option("--padding_px", options.padding_px, "Texels between charts");
+  app.add_option("--min_view_angle_deg",
+                 options.min_view_angle_deg,
+                 "A face is unseen when the view ray is nearer its plane");
+  app.add_option("--depth_tolerance",
+                 options.depth_tolerance,
+                 "Occlusion test: share of the depth");
+  app.add_option("--num_threads", options.num_threads, "-1 = all cores");
+  bool overwrite = false;
+  app.add_option("--overwrite", overwrite, "Replace existing output files");
+  app.add_option("--log_path",
+                 log_path,
+                 "Log file (default <workspace>/logs/texture.log)");
+  if (!command.Parse(argc, argv)) return 0;
+  if (!workspace_path.empty()) {
+    CheckDirectoryExists(workspace_path, "--workspace_path");
+    if (image_path.empty()) image_path = workspace_path + "/images";
+    if (input_path.empty()) input_path = workspace_path + "/sparse/adjusted";
+    if (database_path.empty() && fs::exists(workspace_path + "/database.db")) {
+      database_path = workspace_path + "/database.db";
+    }
+    if (mesh_path.empty()) mesh_path = workspace_path + "/mesh/mesh.ply";
+    if (output_path.empty()) output_path = workspace_path + "/model";
+  }
+  if (image_path.empty() || input_path.empty() || mesh_path.empty() ||
+      output_path.empty()) {
+    ThrowInputError(
+        "give --workspace_path, or --image_path, --input_path, --mesh_path "
+        "and --output_path");
+  }
+  options.preprocess = ParseTexturePreprocess(preprocess);
+  options.blend = ParseTextureBlend(blend);
+  options.Check();
+  export_options.obj = export_options.ply = export_options.vrml =
+      export_options.gltf = false;
+  for (const std::string& format : formats) {
+    if (format == "obj") {
+      export_options.obj = true;
+    } else if (format == "ply") {
+      export_options.ply = true;
+    } else if (format == "wrl") {
+      export_options.vrml = true;
+    } else if (format == "glb") {
+      export_options.gltf = true;
+    } else {
+      ThrowInputError(
+          "--formats: unknown '", format, "' (expected obj, ply, wrl, glb)");
+    }
+  }
+  CheckDirectoryExists(image_path, "--image_path");
+  CheckDirectoryExists(input_path, "--input_path");
+  CheckFileExists(mesh_path, "--mesh_path");
+  if (!database_path.empty()) CheckFileExists(database_path, "--database_path");
+  const std::string report_path = output_path + "/texture.json";
+  CheckOutputPath(report_path, overwrite);
+  for (const char* ext : {".png", ".obj", ".ply", ".wrl", ".glb"}) {
+    CheckOutputPath(output_path + "/" + export_options.stem + ext, overwrite);
+  }
+  if (log_path.empty()) {
+    log_path = WorkspaceLogPath(
+        WorkspaceOfStageFile(output_path + "/texture.json"), "texture");
+  }
+  command.StartLog(log_path);
+
+  const Scene scene = ReadOrientedModel(input_path, database_path);
+  const TriangleMesh mesh = ReadMesh(mesh_path);
+  Timer timer;
+  const std::vector<TextureImage> images =
+      LoadTextureImages(scene, image_path, options);
+  const double seconds_preprocess = timer.Seconds();
+  TexturedMesh textured = MapTexture(mesh, images, options);
+  textured.report.seconds_preprocess = seconds_preprocess;
+  fs::create_directories(output_path);
+  const std::vector<std::string> files =
+      WriteTexturedModel(TexturedModel{textured.mesh, textured.atlas},
+                         output_path,
+                         export_options);
+  WriteFileAtomically(
+      report_path,
+      ReportToJson(textured.report, options, mesh_path, files).dump(2) + "\n");
+  std::string written;
+  for (const std::string& file : files) {
+    written +=
+        (written.empty() ? "" : ", ") + fs::path(file).filename().string();
+  }
+  command.PrintSummary(TextureSummary(textured.report) + "\n  -> " +
+                       output_path + "/: " + written + ", texture.json");
+  return 0;
+}
+
+}  // namespace bayon
