@@ -4,6 +4,10 @@
 #include <glog/logging.h>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 namespace bayon {
 namespace {
 
@@ -23,9 +27,31 @@ cv::Mat ToneMap8(const cv::Mat& color) {
   return out;
 }
 
-cv::Mat WireframeCoverage(const cv::Mat& triangle_id, int scale) {
+int WireframeLineWidth(const cv::Mat& triangle_id, int scale) {
+  CHECK_EQ(triangle_id.type(), CV_32S);
+  std::vector<int32_t> ids;
+  ids.reserve(triangle_id.total());
+  for (int y = 0; y < triangle_id.rows; ++y) {
+    const int32_t* row = triangle_id.ptr<int32_t>(y);
+    for (int x = 0; x < triangle_id.cols; ++x) {
+      if (row[x] >= 0) ids.push_back(row[x]);
+    }
+  }
+  if (ids.empty()) return scale;
+  const double area_px = double(ids.size()) / (double(scale) * scale);
+  std::sort(ids.begin(), ids.end());
+  const double num_faces =
+      double(std::unique(ids.begin(), ids.end()) - ids.begin());
+  const double edge_px = std::sqrt(4 * (area_px / num_faces) / std::sqrt(3.0));
+  return std::clamp(int(std::lround(scale * edge_px / 6)), 1, scale);
+}
+
+cv::Mat WireframeCoverage(const cv::Mat& triangle_id,
+                          int scale,
+                          int line_width) {
   CHECK_EQ(triangle_id.type(), CV_32S);
   CHECK_GE(scale, 1);
+  CHECK(line_width >= 1 && line_width <= scale);
   CHECK(triangle_id.cols % scale == 0 && triangle_id.rows % scale == 0)
       << "the id buffer must be a whole multiple of the output size";
   cv::Mat lines = cv::Mat::zeros(triangle_id.size(), CV_8U);
@@ -40,11 +66,11 @@ cv::Mat WireframeCoverage(const cv::Mat& triangle_id, int scale) {
       if (edge) out[x] = 255;
     }
   }
-  if (scale > 1) {
-    // Lines `scale` fine pixels wide: one output pixel after the box
-    // filter (the marked pixel lies beside the edge, half a fine pixel off).
-    const cv::Mat kernel = cv::Mat::ones(scale, scale, CV_8U);
-    cv::dilate(lines, lines, kernel, cv::Point(scale / 2, scale / 2));
+  if (line_width > 1) {
+    // The marked pixel lies beside the edge: the widened line is centred
+    // on it, half a fine pixel off the edge.
+    const cv::Mat kernel = cv::Mat::ones(line_width, line_width, CV_8U);
+    cv::dilate(lines, lines, kernel, cv::Point(line_width / 2, line_width / 2));
   }
   cv::Mat coverage;
   lines.convertTo(coverage, CV_32F, 1.0 / 255.0);

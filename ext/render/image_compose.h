@@ -17,11 +17,21 @@ cv::Mat ToneMap8(const cv::Mat& color);
 // Hidden-line wireframe of a triangle-id buffer (CV_32S, -1 = background)
 // rendered at `scale` times the output size: a pixel lies on a line where
 // its triangle differs from its right or lower neighbour's, i.e. on a
-// visible edge or the silhouette; lines are widened to `scale` pixels and
-// box-filtered down by `scale`, so they come out about one output pixel
-// wide and anti-aliased. Returns the line coverage, CV_32F in [0, 1], at
-// the output size.
-cv::Mat WireframeCoverage(const cv::Mat& triangle_id, int scale);
+// visible edge or the silhouette; lines are widened to `line_width` fine
+// pixels (1 to scale) and box-filtered down by `scale`, so they come out
+// line_width / scale output pixels wide and anti-aliased. Returns the line
+// coverage, CV_32F in [0, 1], at the output size.
+cv::Mat WireframeCoverage(const cv::Mat& triangle_id,
+                          int scale,
+                          int line_width);
+
+// The line width (in pixels of the fine buffer, 1 to scale) that keeps a
+// wireframe legible: one output pixel where the visible triangles' edges
+// are at least 6 output pixels long, thinner in proportion where the mesh
+// is denser on screen, so that dense meshes show grey tones instead of a
+// black patch. Edge length from the mean visible triangle area A in output
+// pixels, as for an equilateral triangle: sqrt(4 A / sqrt(3)).
+int WireframeLineWidth(const cv::Mat& triangle_id, int scale);
 
 // `background` (CV_32FC3, or an empty Mat for white) with lines of colour
 // `line_bgr` painted at `coverage`.

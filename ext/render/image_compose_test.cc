@@ -31,7 +31,9 @@ TEST(ImageCompose, WireframeDrawsEdgesAndSilhouette) {
   cv::Mat ids(60, 90, CV_32S, cv::Scalar(-1));
   ids.colRange(30, 60).setTo(4);
   ids.colRange(60, 90).setTo(7);
-  const cv::Mat coverage = WireframeCoverage(ids, 3);
+  // Two triangles of 30 x 20 output pixels: lines of full width.
+  EXPECT_EQ(WireframeLineWidth(ids, 3), 3);
+  const cv::Mat coverage = WireframeCoverage(ids, 3, 3);
   ASSERT_EQ(coverage.size(), cv::Size(30, 20));
   for (int y = 0; y < 20; ++y) {
     // Lines around output columns 10 (silhouette) and 20 (shared edge),
@@ -46,7 +48,10 @@ TEST(ImageCompose, WireframeDrawsEdgesAndSilhouette) {
     }
   }
   // Without supersampling: a hard line on one side of each edge.
-  const cv::Mat hard = WireframeCoverage(ids, 1);
+  // A third of the width: a third of the ink.
+  const cv::Mat thin = WireframeCoverage(ids, 3, 1);
+  EXPECT_NEAR(thin.at<float>(7, 9) + thin.at<float>(7, 10), 1 / 3.0f, 1e-6);
+  const cv::Mat hard = WireframeCoverage(ids, 1, 1);
   EXPECT_EQ(hard.at<float>(0, 29), 1.0f);
   EXPECT_EQ(hard.at<float>(0, 59), 1.0f);
   EXPECT_EQ(cv::countNonZero(hard), 2 * 60);
@@ -55,6 +60,24 @@ TEST(ImageCompose, WireframeDrawsEdgesAndSilhouette) {
   EXPECT_EQ(painted.at<cv::Vec3f>(3, 3), cv::Vec3f(1, 1, 1));
   EXPECT_LT(painted.at<cv::Vec3f>(3, 10)[0] + painted.at<cv::Vec3f>(3, 9)[0],
             1.01f);
+}
+
+TEST(ImageCompose, WireframeLinesThinOutOnDenseMeshes) {
+  // Triangles of 2 x 2 fine pixels at scale 3: (4 / 9) output pixels each,
+  // edges of about 1 output pixel: the thinnest lines.
+  cv::Mat dense(60, 60, CV_32S);
+  for (int y = 0; y < 60; ++y) {
+    for (int x = 0; x < 60; ++x) dense.at<int32_t>(y, x) = (y / 2) * 30 + x / 2;
+  }
+  EXPECT_EQ(WireframeLineWidth(dense, 3), 1);
+  // Triangles of 36 x 36 fine pixels, 12 x 12 output: full width.
+  cv::Mat sparse(72, 72, CV_32S);
+  for (int y = 0; y < 72; ++y) {
+    for (int x = 0; x < 72; ++x)
+      sparse.at<int32_t>(y, x) = (y / 36) * 2 + x / 36;
+  }
+  EXPECT_EQ(WireframeLineWidth(sparse, 3), 3);
+  EXPECT_EQ(WireframeLineWidth(cv::Mat(9, 9, CV_32S, cv::Scalar(-1)), 3), 3);
 }
 
 TEST(ImageCompose, AnaglyphTakesRedFromTheLeftEye) {

@@ -104,10 +104,11 @@ class ModelViewRenderer {
                           cv::Scalar(options_.background_bgr.x(),
                                      options_.background_bgr.y(),
                                      options_.background_bgr.z()));
-        images.wireframe =
-            ToneMap8(PaintLines(WireframeCoverage(fine.triangle_id, s),
-                                background,
-                                options_.line_bgr));
+        images.wireframe = ToneMap8(PaintLines(
+            WireframeCoverage(
+                fine.triangle_id, s, WireframeLineWidth(fine.triangle_id, s)),
+            background,
+            options_.line_bgr));
       }
     }
     if (Has(modes, RenderMode::kTextured)) {
