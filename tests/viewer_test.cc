@@ -116,15 +116,24 @@ struct PageRun {
   cv::Mat rgb;           // the screenshot, RGB
 };
 
+// The value of an attribute in an HTML tag, or empty.
+std::string Attribute(const std::string& tag, const std::string& name) {
+  std::smatch match;
+  if (std::regex_search(tag, match, std::regex(" " + name + "=\"([^\"]*)\""))) {
+    return match[1];
+  }
+  return "";
+}
+
 // Opens the page in headless chromium (a fresh profile each time, WebGL on
 // SwiftShader, no network services), lets it run for a few seconds of virtual
 // time, and returns its final <body> tag and a screenshot (kept as
 // <work_dir>/<name>.png for a person to look at).
-PageRun OpenPage(const std::string& chromium,
-                 const std::string& html_path,
-                 const std::string& query,
-                 const std::string& work_dir,
-                 const std::string& name) {
+PageRun OpenPageOnce(const std::string& chromium,
+                     const std::string& html_path,
+                     const std::string& query,
+                     const std::string& work_dir,
+                     const std::string& name) {
   const std::string profile = work_dir + "/profile";
   const std::string png = work_dir + "/" + name + ".png";
   fs::remove_all(profile);
@@ -163,12 +172,20 @@ PageRun OpenPage(const std::string& chromium,
   return run;
 }
 
-std::string Attribute(const std::string& tag, const std::string& name) {
-  std::smatch match;
-  if (std::regex_search(tag, match, std::regex(" " + name + "=\"([^\"]*)\""))) {
-    return match[1];
+// Chromium dumps the DOM when the virtual time runs out, which does not wait
+// for work off the main thread (decoding the texture): on a busy machine the
+// page may still be loading then, so it is opened again, three times at most.
+PageRun OpenPage(const std::string& chromium,
+                 const std::string& html_path,
+                 const std::string& query,
+                 const std::string& work_dir,
+                 const std::string& name) {
+  PageRun run;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    run = OpenPageOnce(chromium, html_path, query, work_dir, name);
+    if (Attribute(run.body_tag, "data-status") != "loading") break;
   }
-  return "";
+  return run;
 }
 
 // Console messages that report errors: uncaught exceptions and the page's own
