@@ -226,8 +226,9 @@ int RunViewer(int argc, char** argv) {
       "The model and the script are inside the page, so it works offline, "
       "from the file system or any static server. URL parameters ?mode=, "
       "&azimuth=, &elevation=, &fov= override the first view, which is "
-      "framed as bayon render's orbit views: --azimuth_deg=-90 "
-      "--elevation_deg=20 --fov_deg=40 in a 4:3 window shows its view 000.");
+      "framed as bayon render's orbit views: the same --azimuth_deg "
+      "(render's --start_azimuth_deg), --elevation_deg and --fov_deg in a "
+      "window of render's shape show what render's view shows.");
   CLI::App& app = command.app();
   app.add_option("--model_path", model_path, "Textured model (.glb)")
       ->required();

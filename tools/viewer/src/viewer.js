@@ -16,8 +16,8 @@
 // the model's bounding box from `azimuth` (counter-clockwise seen from above,
 // from the datum's x axis) and `elevation` (above the horizontal), `fov` is
 // the horizontal field of view, and the distance is the smallest at which
-// every vertex lies inside the share FILL of the window; so ?azimuth=-90&
-// elevation=20&fov=40 in a 4:3 window shows what render's view 000 shows.
+// every vertex lies inside the share FILL of the window; so the same angles
+// in a window of render's shape show what render's view shows.
 //
 // For tests and scripts the state is on <body> (data-status = loading | ready
 // | error, data-error, data-mode, data-vertices, data-faces, data-errors = the
