@@ -116,7 +116,10 @@ int RunRender(int argc, char** argv) {
   app.add_option("--fill",
                  orbit.fill,
                  "orbit: share of the frame the model fills (0.05 to 1)");
-  app.add_option("--up", up_text, "World vertical x,y,z (bayon's datum: z)");
+  app.add_option("--up",
+                 up_text,
+                 "World vertical x,y,z (bayon's datum: z; with stations "
+                 "viewpoints and no --up, the cameras' mean image up)");
   app.add_option("--stereo",
                  stereo_text,
                  "Comma-separated: anaglyph, side_by_side, interleaved "
@@ -230,8 +233,19 @@ int RunRender(int argc, char** argv) {
   const std::vector<Eigen::Vector3d>& points = model.mesh.vertices.positions;
   std::vector<Viewpoint> viewpoints;
   if (viewpoints_name == "stations") {
-    viewpoints = StationViewpoints(
-        ReadOrientedModel(input_path, database_path), points, max_image_size);
+    const Scene scene = ReadOrientedModel(input_path, database_path);
+    // A datum from relative orientation has no known vertical: without
+    // --up, the photographer's (the mean of the cameras' image up, -y)
+    // lights the shaded views from above.
+    if (app.count("--up") == 0 && !scene.images.empty()) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (const auto& [image_id, image] : scene.images) {
+        sum +=
+            image.cam_from_world.rotation.inverse() * Eigen::Vector3d(0, -1, 0);
+      }
+      if (sum.norm() > 1e-6) options.up = sum.normalized();
+    }
+    viewpoints = StationViewpoints(scene, points, max_image_size);
     if (viewpoints.empty()) {
       ThrowInputError(input_path, ": no image of the model sees the model");
     }
