@@ -26,6 +26,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libexiv2-dev libtinygltf-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium  # viewer_test opens the page of bayon viewer in it
+  assimp-utils  # texture_test opens the exported models with Assimp
 )
 # bayon viewer's page is built with npm (tools/viewer); a Node.js from another
 # source (which brings its own npm) is kept.

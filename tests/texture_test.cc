@@ -135,6 +135,47 @@ TEST(TextureCommand, ViewDependentBlendingBeatsTheOptimalImageAlone) {
             << psnr_blended << " dB\n";
 }
 
+// The exports as another program reads them: Assimp (the importer library
+// behind many viewers and converters) loads the OBJ, PLY and glTF with its
+// validation on, without a warning, with every face. (It has no VRML 2.0
+// importer; the VRML file is checked by bayon's own reader in
+// render_model_export_test.)
+TEST(TextureCommand, ExportsOpenInAnIndependentReader) {
+  if (testing::RunCommand({"sh", "-c", "command -v assimp"}).exit_code != 0) {
+    GTEST_SKIP() << "assimp not installed (scripts/setup.sh installs "
+                    "assimp-utils)";
+  }
+  const std::string fixture = Tower();
+  const std::string ws = fixture + "/ws";
+  const std::string out = testing::TempDir("texture_exports");
+  const testing::CommandResult texture =
+      testing::RunBayon({"texture",
+                         "--image_path",
+                         ws + "/images",
+                         "--input_path",
+                         fixture + "/model",
+                         "--mesh_path",
+                         ws + "/gt/surface.ply",
+                         "--output_path",
+                         out,
+                         "--num_threads",
+                         "2"});
+  ASSERT_EQ(texture.exit_code, 0) << texture.output;
+  const int num_faces = ReadJson(out + "/texture.json")["num_faces"];
+  for (const char* file : {"model.obj", "model.ply", "model.glb"}) {
+    const testing::CommandResult info =
+        testing::RunCommand({"assimp", "info", out + "/" + file, "-v"});
+    EXPECT_EQ(info.exit_code, 0) << file << "\n" << info.output;
+    for (const char* bad : {"Warn", "Error", "ERROR"}) {
+      EXPECT_EQ(info.output.find(bad), std::string::npos) << file << "\n"
+                                                          << info.output;
+    }
+    const size_t faces = info.output.find("\nFaces:");
+    ASSERT_NE(faces, std::string::npos) << file << "\n" << info.output;
+    EXPECT_EQ(std::stoi(info.output.substr(faces + 7)), num_faces) << file;
+  }
+}
+
 TEST(TextureCommand, BadInput) {
   const std::string fixture = Tower();
   const std::string ws = fixture + "/ws";

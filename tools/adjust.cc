@@ -14,23 +14,6 @@
 namespace fs = std::filesystem;
 
 namespace bayon {
-namespace {
-
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    const size_t start = item.find_first_not_of(' ');
-    const size_t end = item.find_last_not_of(' ');
-    if (start != std::string::npos) {
-      items.push_back(item.substr(start, end - start + 1));
-    }
-  }
-  return items;
-}
-
-}  // namespace
 
 int RunAdjust(int argc, char** argv) {
   std::string database_path, input_path, output_path, control_path, log_path;

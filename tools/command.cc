@@ -1,14 +1,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "tools/command.h"
 
+#include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 
 #include <glog/logging.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <mutex>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -91,8 +95,38 @@ std::string WorkspaceLogPath(const std::string& workspace,
 std::string WorkspaceOfStageFile(const std::string& path) {
   const fs::path folder = fs::absolute(path).parent_path();
   const std::string name = folder.filename().string();
-  if (name == "dense" || name == "mesh") return folder.parent_path().string();
+  if (name == "dense" || name == "mesh" || name == "model") {
+    return folder.parent_path().string();
+  }
   return folder.string();
+}
+
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    const size_t begin = item.find_first_not_of(" \t");
+    if (begin == std::string::npos) continue;
+    items.push_back(
+        item.substr(begin, item.find_last_not_of(" \t") - begin + 1));
+  }
+  return items;
+}
+
+Eigen::Vector3d ParseVector(const std::string& text, const char* flag) {
+  const std::vector<std::string> items = SplitList(text);
+  Eigen::Vector3d v;
+  bool ok = items.size() == 3;
+  for (size_t i = 0; ok && i < 3; ++i) {
+    char* end = nullptr;
+    v[i] = std::strtod(items[i].c_str(), &end);
+    ok = end != items[i].c_str() && *end == '\0' && std::isfinite(v[i]);
+  }
+  if (!ok) {
+    ThrowInputError(flag, " must be three numbers x,y,z (got '", text, "')");
+  }
+  return v;
 }
 
 std::string DatabaseLogPath(const std::string& log_path,

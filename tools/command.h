@@ -7,10 +7,12 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Core>
 #include <glog/logging.h>
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace bayon {
 
@@ -47,9 +49,15 @@ class CommandLine {
 std::string WorkspaceLogPath(const std::string& workspace,
                              const std::string& command);
 
-// The workspace a stage file belongs to: W for W/dense/x or W/mesh/x, else
-// the file's own folder.
+// The workspace a stage file belongs to: W for W/dense/x, W/mesh/x or
+// W/model/x, else the file's own folder.
 std::string WorkspaceOfStageFile(const std::string& path);
+// "a, b,c" -> {"a", "b", "c"}: items trimmed of spaces, empty ones dropped.
+std::vector<std::string> SplitList(const std::string& text);
+
+// "x,y,z" -> vector; InputError naming `flag` otherwise.
+Eigen::Vector3d ParseVector(const std::string& text, const char* flag);
+
 // For commands on a database: `log_path` if given, else
 // <database folder>/logs/<command>.log.
 std::string DatabaseLogPath(const std::string& log_path,

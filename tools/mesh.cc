@@ -15,18 +15,6 @@
 namespace bayon {
 namespace {
 
-// "x,y,z" -> vector; InputError naming the flag otherwise.
-Eigen::Vector3d ParseVector(const std::string& text, const char* flag) {
-  std::stringstream stream(text);
-  Eigen::Vector3d v;
-  char comma1 = 0, comma2 = 0;
-  if (!(stream >> v.x() >> comma1 >> v.y() >> comma2 >> v.z()) ||
-      comma1 != ',' || comma2 != ',' || !v.allFinite()) {
-    ThrowInputError(flag, " must be three numbers x,y,z (got '", text, "')");
-  }
-  return v;
-}
-
 nlohmann::ordered_json ReportToJson(const MeshReport& r,
                                     const std::string& input_path,
                                     const std::string& output_path) {

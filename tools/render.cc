@@ -19,49 +19,6 @@
 namespace fs = std::filesystem;
 
 namespace bayon {
-namespace {
-
-// "a,b,c" -> {"a", "b", "c"} (spaces trimmed, empty items dropped).
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    const size_t begin = item.find_first_not_of(" \t");
-    if (begin == std::string::npos) continue;
-    items.push_back(
-        item.substr(begin, item.find_last_not_of(" \t") - begin + 1));
-  }
-  return items;
-}
-
-// "x,y,z" -> vector; InputError naming the flag otherwise.
-Eigen::Vector3d ParseVector(const std::string& text, const char* flag) {
-  const std::vector<std::string> items = SplitList(text);
-  Eigen::Vector3d v;
-  bool ok = items.size() == 3;
-  for (size_t i = 0; ok && i < 3; ++i) {
-    char* end = nullptr;
-    v[i] = std::strtod(items[i].c_str(), &end);
-    ok = *end == '\0' && std::isfinite(v[i]);
-  }
-  if (!ok) {
-    ThrowInputError(flag, " must be three numbers x,y,z (got '", text, "')");
-  }
-  return v;
-}
-
-// <workspace>/logs/render.log for a model in W/model/ or W/mesh/.
-std::string DefaultLogPath(const std::string& model_path) {
-  fs::path folder = fs::absolute(model_path).parent_path();
-  const std::string name = folder.filename().string();
-  if (name == "model" || name == "mesh" || name == "dense") {
-    folder = folder.parent_path();
-  }
-  return WorkspaceLogPath(folder.string(), "render");
-}
-
-}  // namespace
 
 int RunRender(int argc, char** argv) {
   std::string model_path, output_path, input_path, database_path, log_path;
@@ -201,7 +158,9 @@ int RunRender(int argc, char** argv) {
     }
   }
   OutputDirectory output(output_path, overwrite);
-  if (log_path.empty()) log_path = DefaultLogPath(model_path);
+  if (log_path.empty()) {
+    log_path = WorkspaceLogPath(WorkspaceOfStageFile(model_path), "render");
+  }
   command.StartLog(log_path);
 
   const TexturedModel model = ReadTexturedModel(model_path);

@@ -6,12 +6,14 @@
 // at build time into kViewerBundleJs), and the model itself.
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/render/model_export.h"
 #include "tools/command.h"
 #include "tools/commands.h"
 
 #include <glog/logging.h>
 #include <nlohmann/json.hpp>
 
+#include <cctype>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -47,82 +49,6 @@ struct ViewerOptions {
         fov_deg > 1 && fov_deg < 170, "--fov_deg", "in (1, 170)", fov_deg);
   }
 };
-
-// What the page will show, read from the glTF binary's JSON chunk.
-struct GlbSummary {
-  size_t num_meshes = 0;
-  size_t num_vertices = 0;
-  size_t num_faces = 0;
-  size_t num_images = 0;
-};
-
-uint32_t ReadU32(const std::string& bytes, size_t offset) {
-  uint32_t value = 0;
-  std::memcpy(&value, bytes.data() + offset, 4);  // glTF is little-endian
-  return value;
-}
-
-size_t AccessorCount(const nlohmann::json& json,
-                     const nlohmann::json& index,
-                     const std::string& path) {
-  const auto& accessors = json.at("accessors");
-  if (!index.is_number_unsigned() || index.get<size_t>() >= accessors.size()) {
-    ThrowInputError(path, ": glTF refers to a missing accessor ", index.dump());
-  }
-  return accessors.at(index.get<size_t>()).at("count").get<size_t>();
-}
-
-// Checks the glTF 2.0 binary container (12-byte header, a JSON chunk first)
-// and counts what it holds; InputError naming the file otherwise.
-GlbSummary CheckGlb(const std::string& bytes, const std::string& path) {
-  constexpr uint32_t kMagic = 0x46546C67;      // "glTF"
-  constexpr uint32_t kJsonChunk = 0x4E4F534A;  // "JSON"
-  if (bytes.size() < 20 || ReadU32(bytes, 0) != kMagic) {
-    ThrowInputError(path, ": not a glTF binary (.glb) file");
-  }
-  if (ReadU32(bytes, 4) != 2) {
-    ThrowInputError(
-        path, ": glTF version ", ReadU32(bytes, 4), " (expected 2)");
-  }
-  if (ReadU32(bytes, 8) != bytes.size()) {
-    ThrowInputError(path,
-                    ": header says ",
-                    ReadU32(bytes, 8),
-                    " bytes, the file has ",
-                    bytes.size(),
-                    " (truncated?)");
-  }
-  const uint32_t json_length = ReadU32(bytes, 12);
-  if (ReadU32(bytes, 16) != kJsonChunk ||
-      20 + size_t{json_length} > bytes.size()) {
-    ThrowInputError(path, ": the first chunk is not a complete JSON chunk");
-  }
-  GlbSummary summary;
-  try {
-    const nlohmann::json json =
-        nlohmann::json::parse(bytes.substr(20, json_length));
-    if (!json.contains("meshes") || json.at("meshes").empty()) {
-      ThrowInputError(path, ": the glTF file has no meshes");
-    }
-    for (const auto& mesh : json.at("meshes")) {
-      ++summary.num_meshes;
-      for (const auto& primitive : mesh.at("primitives")) {
-        const size_t num_positions = AccessorCount(
-            json, primitive.at("attributes").at("POSITION"), path);
-        summary.num_vertices += num_positions;
-        summary.num_faces +=
-            (primitive.contains("indices")
-                 ? AccessorCount(json, primitive.at("indices"), path)
-                 : num_positions) /
-            3;
-      }
-    }
-    if (json.contains("images")) summary.num_images = json.at("images").size();
-  } catch (const nlohmann::json::exception& error) {
-    ThrowInputError(path, ": invalid glTF JSON: ", error.what());
-  }
-  return summary;
-}
 
 std::string Base64(const std::string& bytes) {
   static const char kAlphabet[] =
@@ -264,8 +190,15 @@ int RunViewer(int argc, char** argv) {
   options.Check();
   CheckFileExists(model_path, "--model_path");
   CheckOutputPath(output_path, overwrite);
+  std::string extension = fs::path(model_path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(c));
+  if (extension != ".glb") {
+    ThrowInputError(model_path, ": not a glTF binary (.glb) file");
+  }
+  // Read in full, as the page will: a model the reader refuses (truncated,
+  // inconsistent, its texture undecodable) is refused here, in one line.
+  const TexturedModel model = ReadTexturedModel(model_path);
   const std::string glb = ReadFileToString(model_path);
-  const GlbSummary summary = CheckGlb(glb, model_path);
   if (options.title.empty()) {
     options.title = fs::path(model_path).filename().string();
   }
@@ -275,7 +208,7 @@ int RunViewer(int argc, char** argv) {
     log_path = WorkspaceLogPath(output.parent_path().string(), "viewer");
   }
   command.StartLog(log_path);
-  if (summary.num_images == 0) {
+  if (model.atlas.empty()) {
     LOG(WARNING) << model_path
                  << ": the model has no texture image; the textured mode "
                     "shows its base colour";
@@ -285,12 +218,12 @@ int RunViewer(int argc, char** argv) {
   const std::string page = BuildPage(options, glb);
   WriteFileAtomically(output.File("index.html"), page);
   output.Commit();
-  command.PrintSummary(StrCat(summary.num_vertices,
+  command.PrintSummary(StrCat(model.mesh.NumVertices(),
                               " vertices, ",
-                              summary.num_faces,
+                              model.mesh.NumFaces(),
                               " faces, ",
-                              summary.num_images,
-                              " texture image(s); page ",
+                              model.atlas.empty() ? "no texture" : "textured",
+                              "; page ",
                               (page.size() + 1023) / 1024,
                               " KiB\n  -> ",
                               output.final_path(),

@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# `bayon texture`: view-dependent blending against the optimal image alone,
+# for each radiometric pre-processing, with runtime and peak memory.
+#   tower     the rendered tower (`bayon synth --scene tower`, 960 x 640, 16
+#             views in sun, haze and overcast, 4 held-out viewpoints), its
+#             true orientation and calibration; textured twice: the true
+#             geometry (texture mapping alone) and the mesh bayon makes
+#             (`dense` with 5 masters, `mesh --method cylinder`); judged by
+#             `bayon evaluate` from the held-out viewpoints against the true
+#             texture (PSNR and SSIM after a per-channel gain and offset: the
+#             photographs' light is not the albedo) and by the seam measure
+#   fountain  ../shared/data/fountain-P11 with bayon's orientation, its dense
+#             cloud meshed by Poisson, where `scripts/bench.sh dense` has
+#             made the cloud: time and peak memory, renders from the stations
+# Threads: $BAYON_THREADS (default 2, the CI machine's cores).
+set -euo pipefail
+dir="$(cd "$(dirname "$0")/../.." && pwd)/build/bench/texture"
+threads="${BAYON_THREADS:-2}"
+mkdir -p "$dir"
+source "$(dirname "$0")/lib/timing.sh"
+
+tower="$dir/tower"
+if [ ! -f "$tower/ws/gt/synth.json" ]; then
+  rm -rf "$tower"
+  mkdir -p "$tower"
+  timed "$tower/synth" "$BAYON" synth --scene tower --output_path "$tower/ws" \
+    --num_views 16 --image_width 960 --mesh_spacing_m 0.05 \
+    --texel_size_m 0.01 --supersampling 1 --seed 3 --num_threads "$threads"
+fi
+rm -rf "$tower/model" "$tower/dense" "$tower/mesh" "$tower/runs"
+cp -r "$tower/ws/gt/sparse" "$tower/model"
+cp "$tower/ws/gt/calibration.json" "$tower/model/"
+timed "$tower/dense" "$BAYON" dense --image_path "$tower/ws/images" \
+  --input_path "$tower/model" --output_path "$tower/dense/points.ply" \
+  --num_threads "$threads"
+timed "$tower/mesh" "$BAYON" mesh --input_path "$tower/dense/points.ply" \
+  --output_path "$tower/mesh/mesh.ply" --method cylinder --axis_point 0,0,0
+
+# json_number FILE KEY: the first number stored under KEY.
+json_number() {
+  grep -o "\"$2\": [-0-9.e+]*" "$1" | head -1 | grep -o '[-0-9.e+]*$'
+}
+
+printf '%-14s %-18s %-15s %7s %8s %9s %7s %8s %8s\n' mesh preprocess blend \
+  charts seam "PSNR* dB" SSIM* "time s" "peak MB"
+for mesh in true reconstructed; do
+  mesh_path="$tower/ws/gt/surface.ply"
+  [ "$mesh" = reconstructed ] && mesh_path="$tower/mesh/mesh.ply"
+  for preprocess in highpass_equalize wallis none; do
+    for blend in none view_dependent; do
+      out="$tower/runs/${mesh}_${preprocess}_$blend"
+      mkdir -p "$(dirname "$out")"
+      timed "$out" "$BAYON" texture --image_path "$tower/ws/images" \
+        --input_path "$tower/model" --mesh_path "$mesh_path" \
+        --output_path "$out" --preprocess "$preprocess" --blend "$blend" \
+        --num_threads "$threads" || continue
+      "$BAYON" evaluate --ground_truth_path "$tower/ws/gt" \
+        --textured_mesh_path "$out/model.ply" --output_path "$out/evaluation.json" \
+        --num_threads "$threads" >"$out.evaluate.log" 2>&1 || continue
+      printf '%-14s %-18s %-15s %7s %8.2f %9.2f %7.4f %8.1f %8s\n' "$mesh" \
+        "$preprocess" "$blend" "$(json_number "$out/texture.json" num_charts)" \
+        "$(json_number "$out/texture.json" seam_difference)" \
+        "$(json_number "$out/evaluation.json" mean_normalized_psnr_db)" \
+        "$(json_number "$out/evaluation.json" mean_normalized_ssim)" \
+        "$(wall_s "$out")" "$(peak_mb "$out")"
+    done
+  done
+done
+
+fountain_cloud="$(dirname "$dir")/dense/fountain/dense/points.ply"
+fountain_model="$(dirname "$dir")/chain/fountain/adjusted"
+if [ -f "$fountain_cloud" ] && [ -d "$fountain_model" ]; then
+  fountain="$dir/fountain"
+  rm -rf "$fountain"
+  mkdir -p "$fountain"
+  timed "$fountain/mesh" "$BAYON" mesh --input_path "$fountain_cloud" \
+    --method poisson --output_path "$fountain/mesh.ply"
+  timed "$fountain/texture" "$BAYON" texture \
+    --image_path "$BAYON_DATA_DIR/fountain-P11/images" \
+    --input_path "$fountain_model" --mesh_path "$fountain/mesh.ply" \
+    --output_path "$fountain/model" --num_threads "$threads"
+  timed "$fountain/render" "$BAYON" render \
+    --model_path "$fountain/model/model.obj" --output_path "$fountain/renders" \
+    --viewpoints stations --input_path "$fountain_model" --max_image_size 800 \
+    --stereo anaglyph --num_threads "$threads"
+  echo
+  printf '%-22s %8s %8s %12s %8s %8s\n' "fountain-P11" faces charts atlas \
+    "time s" "peak MB"
+  t="$fountain/model/texture.json"
+  printf '%-22s %8s %8s %12s %8.1f %8s\n' "texture" \
+    "$(json_number "$t" num_faces)" "$(json_number "$t" num_charts)" \
+    "$(json_number "$t" atlas_width)x$(json_number "$t" atlas_height)" \
+    "$(wall_s "$fountain/texture")" "$(peak_mb "$fountain/texture")"
+  printf '%-22s %8s %8s %12s %8.1f %8s\n' "render (11 stations)" - - - \
+    "$(wall_s "$fountain/render")" "$(peak_mb "$fountain/render")"
+  echo "renders: $fountain/renders/"
+fi
