@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 namespace bayon {
@@ -67,16 +68,48 @@ cv::Mat ForEachChannel(const cv::Mat& image, PerChannel&& filter) {
 
 }  // namespace
 
-cv::Mat HighPassEqualize(const cv::Mat& image, double radius_px) {
+cv::Mat HighPassEqualize(const cv::Mat& image,
+                         double radius_px,
+                         const cv::Mat& mask) {
   CheckInput(image, radius_px, "high-pass filter");
+  if (!mask.empty() &&
+      (mask.type() != CV_8UC1 || mask.size() != image.size())) {
+    ThrowInputError(
+        "high-pass filter: the mask must be 8-bit, one channel, "
+        "of the image's size");
+  }
   return ForEachChannel(image, [&](const cv::Mat& channel) {
     cv::Mat value;
     channel.convertTo(value, CV_32F);
     cv::Mat high = value - LowPass(value, radius_px) + 128.0;
     cv::Mat high8;
     high.convertTo(high8, CV_8U);  // saturating
+    // Equalisation: each value to its rank in the (masked) histogram,
+    // the lowest occupied value to 0 and the highest to 255.
+    int histogram[256] = {0};
+    for (int y = 0; y < high8.rows; ++y) {
+      const uint8_t* v = high8.ptr<uint8_t>(y);
+      const uint8_t* m = mask.empty() ? nullptr : mask.ptr<uint8_t>(y);
+      for (int x = 0; x < high8.cols; ++x) {
+        if (!m || m[x]) ++histogram[v[x]];
+      }
+    }
+    int64_t total = 0, lowest = 0;
+    for (int count : histogram) {
+      if (total == 0) lowest = count;
+      total += count;
+    }
+    cv::Mat lut(1, 256, CV_8U);
+    int64_t below = 0;
+    for (int i = 0; i < 256; ++i) {
+      below += histogram[i];
+      lut.at<uint8_t>(i) =
+          total > lowest ? cv::saturate_cast<uint8_t>(255.0 * (below - lowest) /
+                                                      double(total - lowest))
+                         : static_cast<uint8_t>(i);
+    }
     cv::Mat equalized;
-    cv::equalizeHist(high8, equalized);
+    cv::LUT(high8, lut, equalized);
     return equalized;
   });
 }

@@ -32,8 +32,13 @@ struct WallisOptions {
 };
 
 // `image`: CV_8UC1 or CV_8UC3. Throws InputError for other types or a
-// radius below 1.
-cv::Mat HighPassEqualize(const cv::Mat& image, double radius_px);
+// radius below 1. `mask` (CV_8U, non-zero = counted; empty: every pixel)
+// selects the pixels whose histogram is equalised, e.g. the object's own:
+// a large dark background would otherwise take most of the grey range and
+// wash the object out. Every pixel is mapped.
+cv::Mat HighPassEqualize(const cv::Mat& image,
+                         double radius_px,
+                         const cv::Mat& mask = cv::Mat());
 cv::Mat WallisFilter(const cv::Mat& image, const WallisOptions& options);
 
 }  // namespace bayon

@@ -61,6 +61,30 @@ TEST(Radiometry, HighPassEqualizationMakesDifferentLightAgree) {
   EXPECT_GT(hi, 245);
 }
 
+TEST(Radiometry, EqualisationCountsOnlyTheMaskedObject) {
+  // An object in the middle of a black background three times its area.
+  const cv::Mat texture = Texture(256);
+  cv::Mat photo = Lit(texture, 1.0, 1.0, 1.0);
+  cv::Mat mask(photo.size(), CV_8U, cv::Scalar(0));
+  const cv::Rect object(64, 64, 128, 128);
+  mask(object).setTo(255);
+  photo.setTo(cv::Scalar::all(0), ~mask);
+  const cv::Mat whole = HighPassEqualize(photo, 20);
+  const cv::Mat masked = HighPassEqualize(photo, 20, mask);
+  // Without the mask the background's values take most of the range and
+  // the object is pressed into the bright end (washed out); with it, the
+  // object's values spread (its rim, where the high pass sees the dark
+  // background, takes the brightest ranks).
+  cv::Scalar mean_whole, stddev_whole, mean_masked, stddev_masked;
+  const cv::Rect inner(80, 80, 96, 96);
+  cv::meanStdDev(whole(inner).clone().reshape(1), mean_whole, stddev_whole);
+  cv::meanStdDev(masked(inner).clone().reshape(1), mean_masked, stddev_masked);
+  EXPECT_GT(mean_whole[0], 190.0);
+  EXPECT_LT(mean_masked[0], mean_whole[0] - 60.0);
+  EXPECT_GT(stddev_masked[0], 1.3 * stddev_whole[0]);
+  EXPECT_THROW(HighPassEqualize(photo, 20, cv::Mat(8, 8, CV_8U)), InputError);
+}
+
 TEST(Radiometry, WallisPullsLocalMeanAndContrastToTheTarget) {
   const cv::Mat texture = Texture(256);
   const cv::Mat dark = Lit(texture, 0.4, 0.4, 1.0);

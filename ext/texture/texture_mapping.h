@@ -6,7 +6,9 @@
 //
 // 1. Pre-processing of every photograph (ext/image/radiometry.h): high pass
 //    and histogram equalisation per channel (default), a Wallis filter, or
-//    none. The photographs on disk are never changed.
+//    none; equalisation counts only the pixels the mesh covers, so that a
+//    dark background does not wash the object out. The photographs on disk
+//    are never changed.
 // 2. Visibility of every triangle in every photograph: the mesh rendered
 //    through the photograph's camera (ext/render, the full camera model
 //    with distortion) gives a depth map; a triangle is seen when its
@@ -93,7 +95,7 @@ struct TextureImage {
   std::string name;
   const Camera* camera = nullptr;
   const Image* image = nullptr;  // pose and frame
-  cv::Mat bgr;                   // CV_8UC3, after pre-processing
+  cv::Mat bgr;                   // CV_8UC3, as photographed
 };
 
 struct TextureReport {
@@ -110,6 +112,7 @@ struct TextureReport {
   std::map<std::string, int> faces_per_image;
   int num_seam_edges = 0;
   double seam_difference = 0;  // mean absolute, 8-bit grey levels
+  double seconds_load = 0;     // reading the photographs (the caller's)
   double seconds_preprocess = 0;
   double seconds_visibility = 0;
   double seconds_atlas = 0;
@@ -121,9 +124,9 @@ struct TexturedMesh {
   TextureReport report;
 };
 
-// Loads the scene's images from `image_path` (by name) and pre-processes
-// them. Throws InputError naming a missing or unreadable image or one whose
-// size differs from its camera's.
+// Loads the scene's images from `image_path` (by name). Throws InputError
+// naming a missing or unreadable image or one whose size differs from its
+// camera's.
 std::vector<TextureImage> LoadTextureImages(const Scene& scene,
                                             const std::string& image_path,
                                             const TextureOptions& options);

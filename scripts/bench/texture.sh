@@ -9,9 +9,10 @@
 #             `bayon evaluate` from the held-out viewpoints against the true
 #             texture (PSNR and SSIM after a per-channel gain and offset: the
 #             photographs' light is not the albedo) and by the seam measure
-#   fountain  ../shared/data/fountain-P11 with bayon's orientation, its dense
-#             cloud meshed by Poisson, where `scripts/bench.sh dense` has
-#             made the cloud: time and peak memory, renders from the stations
+#   fountain  ../shared/data/fountain-P11 and temple-ring with bayon's
+#   temple    orientation, their dense clouds meshed by Poisson, where
+#             `scripts/bench.sh dense` has made the clouds: time and peak
+#             memory; renders (all modes and anaglyphs) from the stations
 # Threads: $BAYON_THREADS (default 2, the CI machine's cores).
 set -euo pipefail
 dir="$(cd "$(dirname "$0")/../.." && pwd)/build/bench/texture"
@@ -67,31 +68,32 @@ for mesh in true reconstructed; do
   done
 done
 
-fountain_cloud="$(dirname "$dir")/dense/fountain/dense/points.ply"
-fountain_model="$(dirname "$dir")/chain/fountain/adjusted"
-if [ -f "$fountain_cloud" ] && [ -d "$fountain_model" ]; then
-  fountain="$dir/fountain"
-  rm -rf "$fountain"
-  mkdir -p "$fountain"
-  timed "$fountain/mesh" "$BAYON" mesh --input_path "$fountain_cloud" \
-    --method poisson --output_path "$fountain/mesh.ply"
-  timed "$fountain/texture" "$BAYON" texture \
-    --image_path "$BAYON_DATA_DIR/fountain-P11/images" \
-    --input_path "$fountain_model" --mesh_path "$fountain/mesh.ply" \
-    --output_path "$fountain/model" --num_threads "$threads"
-  timed "$fountain/render" "$BAYON" render \
-    --model_path "$fountain/model/model.obj" --output_path "$fountain/renders" \
-    --viewpoints stations --input_path "$fountain_model" --max_image_size 800 \
-    --stereo anaglyph --num_threads "$threads"
-  echo
-  printf '%-22s %8s %8s %12s %8s %8s\n' "fountain-P11" faces charts atlas \
-    "time s" "peak MB"
-  t="$fountain/model/texture.json"
-  printf '%-22s %8s %8s %12s %8.1f %8s\n' "texture" \
+# The real rings, where `scripts/bench.sh dense` has made their clouds.
+echo
+printf '%-14s %8s %8s %8s %12s %8s %8s\n' set step faces charts atlas "time s" \
+  "peak MB"
+for set in fountain-P11:fountain:/images temple-ring:temple:; do
+  IFS=: read -r data name images <<<"$set"
+  cloud="$(dirname "$dir")/dense/$name/dense/points.ply"
+  model="$(dirname "$dir")/chain/$name/adjusted"
+  [ -f "$cloud" ] && [ -d "$model" ] || continue
+  out="$dir/$name"
+  rm -rf "$out"
+  mkdir -p "$out"
+  timed "$out/mesh" "$BAYON" mesh --input_path "$cloud" --method poisson \
+    --output_path "$out/mesh.ply" || continue
+  timed "$out/texture" "$BAYON" texture \
+    --image_path "$BAYON_DATA_DIR/$data$images" --input_path "$model" \
+    --mesh_path "$out/mesh.ply" --output_path "$out/model" \
+    --num_threads "$threads" || continue
+  timed "$out/render" "$BAYON" render --model_path "$out/model/model.obj" \
+    --output_path "$out/renders" --viewpoints stations --input_path "$model" \
+    --max_image_size 800 --stereo anaglyph --num_threads "$threads" || continue
+  t="$out/model/texture.json"
+  printf '%-14s %8s %8s %8s %12s %8.1f %8s\n' "$name" texture \
     "$(json_number "$t" num_faces)" "$(json_number "$t" num_charts)" \
     "$(json_number "$t" atlas_width)x$(json_number "$t" atlas_height)" \
-    "$(wall_s "$fountain/texture")" "$(peak_mb "$fountain/texture")"
-  printf '%-22s %8s %8s %12s %8.1f %8s\n' "render (11 stations)" - - - \
-    "$(wall_s "$fountain/render")" "$(peak_mb "$fountain/render")"
-  echo "renders: $fountain/renders/"
-fi
+    "$(wall_s "$out/texture")" "$(peak_mb "$out/texture")"
+  printf '%-14s %8s %8s %8s %12s %8.1f %8s\n' "$name" render - - - \
+    "$(wall_s "$out/render")" "$(peak_mb "$out/render")"
+done
