@@ -59,24 +59,32 @@ struct TextureRun {
   nlohmann::json evaluation;
 };
 
+// `bayon texture` on the tower's true geometry into `out`.
+testing::CommandResult Texture(const std::string& fixture,
+                               const std::string& out,
+                               const std::vector<std::string>& extra = {}) {
+  const std::string ws = fixture + "/ws";
+  std::vector<std::string> args = {"texture",
+                                   "--image_path",
+                                   ws + "/images",
+                                   "--input_path",
+                                   fixture + "/model",
+                                   "--mesh_path",
+                                   ws + "/gt/surface.ply",
+                                   "--output_path",
+                                   out,
+                                   "--num_threads",
+                                   "2"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return testing::RunBayon(args);
+}
+
 TextureRun TextureAndEvaluate(const std::string& fixture,
                               const std::string& blend,
                               const std::string& out) {
   const std::string ws = fixture + "/ws";
   const testing::CommandResult texture =
-      testing::RunBayon({"texture",
-                         "--image_path",
-                         ws + "/images",
-                         "--input_path",
-                         fixture + "/model",
-                         "--mesh_path",
-                         ws + "/gt/surface.ply",
-                         "--output_path",
-                         out,
-                         "--blend",
-                         blend,
-                         "--num_threads",
-                         "2"});
+      Texture(fixture, out, {"--blend", blend});
   EXPECT_EQ(texture.exit_code, 0) << texture.output;
   std::cout << texture.output;
   const testing::CommandResult evaluate =
@@ -146,20 +154,8 @@ TEST(TextureCommand, ExportsOpenInAnIndependentReader) {
                     "assimp-utils)";
   }
   const std::string fixture = Tower();
-  const std::string ws = fixture + "/ws";
   const std::string out = testing::TempDir("texture_exports");
-  const testing::CommandResult texture =
-      testing::RunBayon({"texture",
-                         "--image_path",
-                         ws + "/images",
-                         "--input_path",
-                         fixture + "/model",
-                         "--mesh_path",
-                         ws + "/gt/surface.ply",
-                         "--output_path",
-                         out,
-                         "--num_threads",
-                         "2"});
+  const testing::CommandResult texture = Texture(fixture, out);
   ASSERT_EQ(texture.exit_code, 0) << texture.output;
   const int num_faces = ReadJson(out + "/texture.json")["num_faces"];
   for (const char* file : {"model.obj", "model.ply", "model.glb"}) {

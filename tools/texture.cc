@@ -88,10 +88,11 @@ int RunTexture(int argc, char** argv) {
   app.add_option("--filter_radius_px",
                  options.filter_radius_px,
                  "High-pass radius / Wallis window (Gaussian sigma), px");
-  app.add_option("--blend",
-                 blend,
-                 "view_dependent (weighted by projected area) or none (the "
-                 "optimal image alone)");
+  app.add_option(
+      "--blend",
+      blend,
+      "view_dependent (weighted by projected area) or none (the "
+      "chart's image alone: the optimal one, see --chart_merge_ratio)");
   app.add_option("--chart_merge_ratio",
                  options.chart_merge_ratio,
                  "A face joins its neighbours' image when that sees it with "
@@ -156,9 +157,20 @@ int RunTexture(int argc, char** argv) {
   CheckDirectoryExists(input_path, "--input_path");
   CheckFileExists(mesh_path, "--mesh_path");
   if (!database_path.empty()) CheckFileExists(database_path, "--database_path");
+  if (export_options.stem.empty() ||
+      export_options.stem.find_first_of("/\\") != std::string::npos ||
+      export_options.stem == "." || export_options.stem == "..") {
+    ThrowInputError(
+        "--stem must be a plain file name (got '", export_options.stem, "')");
+  }
   const std::string report_path = output_path + "/texture.json";
   CheckOutputPath(report_path, overwrite);
-  for (const char* ext : {".png", ".obj", ".ply", ".wrl", ".glb"}) {
+  std::vector<std::string> extensions = {".png"};
+  if (export_options.obj) extensions.insert(extensions.end(), {".obj", ".mtl"});
+  if (export_options.ply) extensions.push_back(".ply");
+  if (export_options.vrml) extensions.push_back(".wrl");
+  if (export_options.gltf) extensions.push_back(".glb");
+  for (const std::string& ext : extensions) {
     CheckOutputPath(output_path + "/" + export_options.stem + ext, overwrite);
   }
   if (log_path.empty()) {
@@ -182,7 +194,9 @@ int RunTexture(int argc, char** argv) {
                          export_options);
   WriteFileAtomically(
       report_path,
-      ReportToJson(textured.report, options, mesh_path, files).dump(2) + "\n");
+      ReportToJson(textured.report, options, mesh_path, files)
+              .dump(2, ' ', false, nlohmann::json::error_handler_t::replace) +
+          "\n");
   std::string written;
   for (const std::string& file : files) {
     written +=

@@ -115,7 +115,8 @@ std::string BuildPage(const ViewerOptions& options, const std::string& glb) {
   // '<' only occurs inside JSON strings, where \u003c means the same and
   // cannot close the <script> element.
   std::string config_text;
-  for (const char c : config.dump()) {
+  for (const char c :
+       config.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)) {
     config_text += c == '<' ? std::string("\\u003c") : std::string(1, c);
   }
   std::string page;

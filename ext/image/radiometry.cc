@@ -132,7 +132,9 @@ cv::Mat WallisFilter(const cv::Mat& image, const WallisOptions& options) {
     cv::Mat stddev;
     cv::sqrt(cv::max(variance, 0.0), stddev);
     const double st = options.target_stddev;
-    cv::Mat gain = (c * st) / (c * stddev + (1.0 - c) * st);
+    // A flat window with c = 1 would divide by zero: no gain beyond 1e6.
+    cv::Mat gain =
+        (c * st) / cv::max(c * stddev + (1.0 - c) * st, c * st * 1e-6);
     cv::Mat result =
         (value - mean).mul(gain) + b * options.target_mean + (1.0 - b) * mean;
     cv::Mat result8;

@@ -843,12 +843,28 @@ class GlbAccessors {
     const size_t count = accessor.at("count").get<size_t>();
     const int view_index = accessor.at("bufferView").get<int>();
     const std::string view = View(view_index);
-    const size_t stride =
-        Item("bufferViews", view_index).value("byteStride", size * components);
+    const size_t element_size = size * components;
+    const int64_t given_stride =
+        Item("bufferViews", view_index)
+            .value("byteStride", int64_t(element_size));
+    // glTF: a stride is a multiple of 4 in [4, 252] and holds one element.
+    if (given_stride != int64_t(element_size) &&
+        (given_stride < int64_t(element_size) || given_stride > 252 ||
+         given_stride % 4 != 0)) {
+      Fail("bufferViews[",
+           view_index,
+           "]: byteStride ",
+           given_stride,
+           " is not valid for ",
+           element_size,
+           "-byte elements");
+    }
+    const size_t stride = static_cast<size_t>(given_stride);
     const size_t offset = accessor.value("byteOffset", size_t(0));
+    // Divided, not multiplied, so that no count can wrap around.
     if (count > 0 &&
-        (offset > view.size() ||
-         (count - 1) * stride + size * components > view.size() - offset)) {
+        (offset > view.size() || element_size > view.size() - offset ||
+         count - 1 > (view.size() - offset - element_size) / stride)) {
       Fail("accessors[",
            index,
            "]: ",

@@ -53,7 +53,7 @@ struct ModelExportOptions {
 
 // The paths written, in the order above (the PNG atlas first).
 // Throws InputError if the mesh has no texture coordinates or the atlas is
-// empty, RunFailure if a file cannot be written.
+// empty or a file cannot be written (naming it).
 std::vector<std::string> WriteTexturedModel(const TexturedModel& model,
                                             const std::string& output_dir,
                                             const ModelExportOptions& options);

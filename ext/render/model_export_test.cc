@@ -297,24 +297,38 @@ TEST(ModelExport, ReadsPlainGlbWithSeveralPrimitives) {
   json["bufferViews"].push_back({{"buffer", 0},
                                  {"byteOffset", view_offsets[4]},
                                  {"byteLength", png.size()}});
-  std::string json_text = json.dump();
-  while (json_text.size() % 4) json_text.push_back(' ');
-  std::string glb = "glTF";
-  auto u32 = [&glb](uint32_t value) { glb.append((const char*)&value, 4); };
-  u32(2);
-  u32(uint32_t(12 + 8 + json_text.size() + 8 + bin.size()));
-  u32(uint32_t(json_text.size()));
-  u32(0x4E4F534Au);
-  glb += json_text;
-  u32(uint32_t(bin.size()));
-  u32(0x004E4942u);
-  glb += bin;
-  const std::string path = testing::TempDir("model_export_plain") + "/x.glb";
-  WriteFileAtomically(path, glb);
+  const std::string dir = testing::TempDir("model_export_plain");
+  auto write_glb = [&](const nlohmann::json& content, const std::string& name) {
+    std::string json_text = content.dump();
+    while (json_text.size() % 4) json_text.push_back(' ');
+    std::string glb = "glTF";
+    auto u32 = [&glb](uint32_t value) { glb.append((const char*)&value, 4); };
+    u32(2);
+    u32(uint32_t(12 + 8 + json_text.size() + 8 + bin.size()));
+    u32(uint32_t(json_text.size()));
+    u32(0x4E4F534Au);
+    glb += json_text;
+    u32(uint32_t(bin.size()));
+    u32(0x004E4942u);
+    glb += bin;
+    WriteFileAtomically(dir + "/" + name, glb);
+    return dir + "/" + name;
+  };
 
-  const TexturedModel back = ReadTexturedModel(path);
+  const TexturedModel back = ReadTexturedModel(write_glb(json, "x.glb"));
   EXPECT_EQ(back.mesh.NumVertices(), 54u);
   ExpectSameModel(grid, back, 1e-7);
+
+  // A negative stride (read as 2^64 - 8) or a count that would wrap the
+  // size check must not read outside the buffer.
+  nlohmann::json bad_stride = json;
+  bad_stride["bufferViews"][0]["byteStride"] = -8;
+  EXPECT_THROW(ReadTexturedModel(write_glb(bad_stride, "stride.glb")),
+               InputError);
+  nlohmann::json bad_count = json;
+  bad_count["accessors"][0]["count"] = (uint64_t(1) << 62) + 1;
+  EXPECT_THROW(ReadTexturedModel(write_glb(bad_count, "count.glb")),
+               InputError);
 }
 
 TEST(ModelExport, ReadsObjVariants) {

@@ -328,7 +328,9 @@ void TextureOptions::Check() const {
   if (!(chart_merge_ratio > 0 && chart_merge_ratio <= 1)) {
     ThrowInputError("--chart_merge_ratio must lie in (0, 1]");
   }
-  if (max_atlas_size < 64) ThrowInputError("--max_atlas_size must be >= 64");
+  if (max_atlas_size < 64 || max_atlas_size > 32768) {
+    ThrowInputError("--max_atlas_size must lie in [64, 32768]");
+  }
   if (padding_px < 1) ThrowInputError("--padding_px must be at least 1");
   if (!(min_view_angle_deg >= 0 && min_view_angle_deg < 90)) {
     ThrowInputError("--min_view_angle_deg must lie in [0, 90)");
@@ -346,6 +348,13 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
   for (const auto& [image_id, image] : scene.images) {
     TextureImage t;
     t.name = image.name;
+    if (!scene.cameras.contains(image.camera_id)) {
+      ThrowInputError("image ",
+                      image.name,
+                      ": its camera ",
+                      image.camera_id,
+                      " is not in the model");
+    }
     t.camera = &scene.cameras.at(image.camera_id);
     t.image = &image;
     images.push_back(t);
@@ -578,6 +587,18 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   const int pad = options.padding_px;
   cv::Size atlas_size;
   for (int attempt = 0;; ++attempt) {
+    if (attempt == 30) {
+      ThrowInputError("the atlas does not fit into --max_atlas_size ",
+                      options.max_atlas_size,
+                      " with --padding_px ",
+                      pad,
+                      " around each of ",
+                      charts.size(),
+                      " charts (raise --max_atlas_size or lower "
+                      "--chart_merge_ratio)");
+    }
+    // Chart sides in doubles first: a tiny --texel_size must not overflow.
+    double largest_side = 0;
     for (Chart& chart : charts) {
       const double scale = 1.0 / (texel_size * chart.pixels_per_metre);
       chart.min = Eigen::Vector2d::Constant(1e300);
@@ -588,6 +609,14 @@ TexturedMesh MapTexture(const TriangleMesh& input,
           chart.max = chart.max.cwiseMax(scale * c);
         }
       }
+      largest_side = std::max(largest_side, (chart.max - chart.min).maxCoeff());
+    }
+    if (largest_side + 2 * pad + 1 > options.max_atlas_size) {
+      texel_size *=
+          1.02 * (largest_side + 2 * pad + 1) / options.max_atlas_size;
+      continue;
+    }
+    for (Chart& chart : charts) {
       chart.width = static_cast<int>(std::ceil(chart.max.x() - chart.min.x())) +
                     2 * pad + 1;
       chart.height =
@@ -604,7 +633,6 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     }
     const int side = std::max(atlas_size.width, atlas_size.height);
     if (side <= options.max_atlas_size) break;
-    CHECK_LT(attempt, 20);
     texel_size *= 1.02 * side / options.max_atlas_size;
   }
   report.texel_size = texel_size;
@@ -674,20 +702,24 @@ TexturedMesh MapTexture(const TriangleMesh& input,
           s.weight = v.area_px / best_area[face];
           sources.push_back(s);
         }
+        // Clamped to the chart's own rectangle: charts are filled in
+        // parallel and must not touch each other's texels.
+        const int cx0 = static_cast<int>(chart.offset.x());
+        const int cy0 = static_cast<int>(chart.offset.y());
         const int x0 = std::max(
-            0,
+            cx0,
             static_cast<int>(
                 std::floor(std::min({t[0].x(), t[1].x(), t[2].x()}) - 1.0)));
         const int y0 = std::max(
-            0,
+            cy0,
             static_cast<int>(
                 std::floor(std::min({t[0].y(), t[1].y(), t[2].y()}) - 1.0)));
         const int x1 = std::min(
-            atlas.cols - 1,
+            cx0 + chart.width - 1,
             static_cast<int>(
                 std::ceil(std::max({t[0].x(), t[1].x(), t[2].x()}) + 1.0)));
         const int y1 = std::min(
-            atlas.rows - 1,
+            cy0 + chart.height - 1,
             static_cast<int>(
                 std::ceil(std::max({t[0].y(), t[1].y(), t[2].y()}) + 1.0)));
         for (int y = y0; y <= y1; ++y) {

@@ -31,7 +31,8 @@
 //    triangle, weights area_j / area_max; the position in photograph j is
 //    the affine transformation fixed by the triangle's three projected
 //    corners (from the optimal image's geometry into image j's). With
-//    `blend = kNone` only the optimal image is used (for comparison).
+//    `blend = kNone` only the chart's image is used (for comparison): the
+//    optimal image, or its neighbours' where step 4 merged the face.
 //
 // Texel size: `texel_size` metres, or by default the median ground sampling
 // distance of the triangles in their optimal images, so that the atlas keeps
@@ -106,7 +107,9 @@ struct TextureReport {
   int atlas_width = 0;
   int atlas_height = 0;
   double texel_size = 0;  // metres
-  double atlas_fill = 0;  // share of the atlas covered by triangles
+  // Share of the atlas written from the photographs: the triangles, a texel
+  // ring around them, and the unseen block (the rest is padding).
+  double atlas_fill = 0;
   double mean_views_per_face = 0;
   // Faces by optimal image, by image name.
   std::map<std::string, int> faces_per_image;

@@ -215,6 +215,12 @@ TEST(TextureMapping, RejectsAMeshNoPhotographSees) {
                InputError);
   EXPECT_THROW(MapTexture(TriangleMesh(), Photographs(scene), TextureOptions()),
                InputError);
+  // Sixteen charts with 30 texels of padding each cannot share 64 x 64.
+  TextureOptions cramped;
+  cramped.max_atlas_size = 64;
+  cramped.padding_px = 30;
+  EXPECT_THROW(MapTexture(Untextured(scene.truth), Photographs(scene), cramped),
+               InputError);
   EXPECT_THROW(ParseTextureBlend("best"), InputError);
   EXPECT_THROW(ParseTexturePreprocess("clahe"), InputError);
 }
