@@ -238,6 +238,77 @@ bool SampleColor(const cv::Mat& image,
   return true;
 }
 
+// Each face no photograph sees has a cell of this many texels square in the
+// unseen block, one colour, its three texture coordinates at the centre.
+constexpr int kUnseenCell = 3;
+
+Eigen::Vector2d UnseenCellCenter(const Chart& unseen,
+                                 int pad,
+                                 int columns,
+                                 size_t i) {
+  return unseen.offset + Eigen::Vector2d::Constant(pad + 0.5 * kUnseenCell) +
+         kUnseenCell *
+             Eigen::Vector2d(double(i % columns), double(i / columns));
+}
+
+// Colours the cells of the faces no photograph sees (the unseen block, grey
+// so far) from the faces around them: breadth first from the seen faces,
+// each unseen face the mean of its already coloured edge neighbours. A
+// region that touches no seen face keeps the grey.
+void ColorUnseenFaces(const std::vector<std::array<int, 3>>& neighbors,
+                      const std::vector<std::array<Eigen::Vector2d, 3>>& texel,
+                      const Chart& unseen,
+                      int pad,
+                      int columns,
+                      cv::Mat* atlas) {
+  const int num_faces = static_cast<int>(neighbors.size());
+  std::vector<int> cell(num_faces, -1);
+  for (size_t i = 0; i < unseen.faces.size(); ++i) {
+    cell[unseen.faces[i]] = static_cast<int>(i);
+  }
+  std::vector<Eigen::Vector3f> color(num_faces, Eigen::Vector3f::Zero());
+  std::vector<bool> known(num_faces, false);
+  for (int face = 0; face < num_faces; ++face) {
+    if (cell[face] >= 0) continue;
+    const Eigen::Vector2d centroid =
+        (texel[face][0] + texel[face][1] + texel[face][2]) / 3.0;
+    known[face] = SampleColor(*atlas, centroid, &color[face]);
+  }
+  std::vector<int> front = unseen.faces;
+  while (!front.empty()) {
+    std::vector<std::pair<int, Eigen::Vector3f>> found;
+    std::vector<int> next;
+    for (int face : front) {
+      Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+      int n = 0;
+      for (int g : neighbors[face]) {
+        if (g >= 0 && known[g]) {
+          sum += color[g];
+          ++n;
+        }
+      }
+      if (n > 0) {
+        found.emplace_back(face, sum / n);
+      } else {
+        next.push_back(face);
+      }
+    }
+    if (found.empty()) break;
+    for (const auto& [face, c] : found) {
+      color[face] = c;
+      known[face] = true;
+      const Eigen::Vector2d center =
+          UnseenCellCenter(unseen, pad, columns, cell[face]);
+      const cv::Rect rect(static_cast<int>(center.x() - 0.5 * kUnseenCell),
+                          static_cast<int>(center.y() - 0.5 * kUnseenCell),
+                          kUnseenCell,
+                          kUnseenCell);
+      (*atlas)(rect).setTo(cv::Scalar(c[0], c[1], c[2]));
+    }
+    front.swap(next);
+  }
+}
+
 // Fills texels that no triangle covered from their covered neighbours,
 // ring by ring, `rings` times (padding against bleeding).
 void DilateAtlas(int rings, cv::Mat* atlas, cv::Mat* covered) {
@@ -459,25 +530,26 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   const std::vector<EdgeFace> edges = SortedEdges(mesh);
   std::vector<int> source = best;
   std::vector<float> source_area = best_area;
-  if (options.chart_merge_ratio < 1) {
-    std::vector<std::array<int, 3>> neighbors(num_faces, {-1, -1, -1});
-    for (size_t i = 0; i + 1 < edges.size(); ++i) {
-      if (!edges[i].SameEdge(edges[i + 1]) ||
-          (i > 0 && edges[i - 1].SameEdge(edges[i])) ||
-          (i + 2 < edges.size() && edges[i + 2].SameEdge(edges[i]))) {
-        continue;  // boundary or non-manifold
-      }
-      for (const auto& [f, g] :
-           {std::make_pair(edges[i].face, edges[i + 1].face),
-            std::make_pair(edges[i + 1].face, edges[i].face)}) {
-        for (int& slot : neighbors[f]) {
-          if (slot < 0) {
-            slot = g;
-            break;
-          }
+  // Faces across each manifold edge (-1: none).
+  std::vector<std::array<int, 3>> neighbors(num_faces, {-1, -1, -1});
+  for (size_t i = 0; i + 1 < edges.size(); ++i) {
+    if (!edges[i].SameEdge(edges[i + 1]) ||
+        (i > 0 && edges[i - 1].SameEdge(edges[i])) ||
+        (i + 2 < edges.size() && edges[i + 2].SameEdge(edges[i]))) {
+      continue;  // boundary or non-manifold
+    }
+    for (const auto& [f, g] :
+         {std::make_pair(edges[i].face, edges[i + 1].face),
+          std::make_pair(edges[i + 1].face, edges[i].face)}) {
+      for (int& slot : neighbors[f]) {
+        if (slot < 0) {
+          slot = g;
+          break;
         }
       }
     }
+  }
+  if (options.chart_merge_ratio < 1) {
     for (int iteration = 0; iteration < 5; ++iteration) {
       int changed = 0;
       for (int face = 0; face < num_faces; ++face) {
@@ -623,8 +695,12 @@ TexturedMesh MapTexture(const TriangleMesh& input,
           static_cast<int>(std::ceil(chart.max.y() - chart.min.y())) + 2 * pad +
           1;
     }
-    // The faces no photograph sees share one small block of unseen colour.
-    unseen.width = unseen.height = unseen.faces.empty() ? 0 : 2 * pad + 2;
+    // The faces no photograph sees get a cell of kUnseenCell x kUnseenCell
+    // texels each in one block, coloured later from their neighbours.
+    const int unseen_columns = static_cast<int>(
+        std::ceil(std::sqrt(static_cast<double>(unseen.faces.size()))));
+    unseen.width = unseen.height =
+        unseen.faces.empty() ? 0 : unseen_columns * kUnseenCell + 2 * pad;
     if (!unseen.faces.empty()) charts.push_back(unseen);
     atlas_size = PackCharts(&charts);
     if (!unseen.faces.empty()) {
@@ -651,9 +727,12 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       }
     }
   }
-  const Eigen::Vector2d unseen_center =
-      unseen.offset + Eigen::Vector2d::Constant(0.5 * unseen.width);
-  for (int face : unseen.faces) texel[face].fill(unseen_center);
+  const int unseen_columns =
+      (unseen.width - 2 * pad) / std::max(1, kUnseenCell);
+  for (size_t i = 0; i < unseen.faces.size(); ++i) {
+    texel[unseen.faces[i]].fill(
+        UnseenCellCenter(unseen, pad, unseen_columns, i));
+  }
 
   // 5. Fill the atlas, chart by chart in parallel (charts own disjoint
   // rectangles). Each face first writes the texels whose centres lie inside
@@ -762,6 +841,7 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     progress.Add();
   });
   progress.Finish();
+  ColorUnseenFaces(neighbors, texel, unseen, pad, unseen_columns, &atlas);
   report.atlas_fill =
       double(cv::countNonZero(covered)) / (double(atlas.cols) * atlas.rows);
   DilateAtlas(pad, &atlas, &covered);

@@ -207,6 +207,56 @@ TEST(TextureMapping, BlendingHidesTheSeamsOfDifferentExposures) {
       << "\nblended: " << TextureSummary(blended.report);
 }
 
+TEST(TextureMapping, UnseenFacesTakeTheColoursAroundThem) {
+  // A tent: one connected grid rising to a ridge along x at y = 0; the
+  // cameras stand low on the +y side, so the far slope is hidden.
+  const int n = 16;
+  TriangleMesh tent;
+  for (int j = 0; j <= 2 * n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      const double y = double(j) / n - 1.0;
+      tent.vertices.positions.emplace_back(
+          double(i) / n - 0.5, y, 0.5 * (1.0 - std::abs(y)));
+    }
+  }
+  for (int j = 0; j < 2 * n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      tent.faces.emplace_back(a, b, d);
+      tent.faces.emplace_back(a, d, c);
+    }
+  }
+  SyntheticCameraOptions camera_options;
+  camera_options.width = 600;
+  camera_options.height = 400;
+  camera_options.pixel_pitch_mm = 0.06;
+  const Camera camera = SyntheticCamera(camera_options);
+  // Photographs of one plain colour: what the unseen faces should take.
+  std::vector<Image> poses(3);
+  std::vector<TextureImage> images(3);
+  for (int k = 0; k < 3; ++k) {
+    poses[k].name = std::to_string(k);
+    poses[k].cam_from_world =
+        LookAt(Eigen::Vector3d(-1.0 + k, 3.0, 0.2), Eigen::Vector3d(0, 0, 0.2));
+    images[k].name = poses[k].name;
+    images[k].camera = &camera;
+    images[k].image = &poses[k];
+    images[k].bgr = cv::Mat(400, 600, CV_8UC3, cv::Scalar(30, 140, 220));
+  }
+  TextureOptions options;
+  options.preprocess = TexturePreprocess::kNone;
+  const TexturedMesh model = MapTexture(tent, images, options);
+  ASSERT_GT(model.report.num_unseen_faces, int(tent.NumFaces() / 5));
+  ASSERT_LT(model.report.num_unseen_faces, int(tent.NumFaces()));
+  const MipTexture atlas(model.atlas);
+  for (const auto& corners : model.mesh.face_texcoords) {
+    const Eigen::Vector3f color = 255.0f * atlas.SampleLevel(corners[0], 0);
+    EXPECT_NEAR(color[0], 30, 2);
+    EXPECT_NEAR(color[1], 140, 2);
+    EXPECT_NEAR(color[2], 220, 2);
+  }
+}
+
 TEST(TextureMapping, RejectsAMeshNoPhotographSees) {
   BoxScene scene = MakeBoxScene({1.0f, 1.0f});
   TriangleMesh far = Untextured(scene.truth);
