@@ -101,6 +101,34 @@ std::string WorkspaceOfStageFile(const std::string& path) {
   return folder.string();
 }
 
+void OrientedInput::AddOptions(CLI::App& app,
+                               const std::string& workspace_help) {
+  app.add_option("--workspace_path", workspace_path, workspace_help);
+  app.add_option("--image_path", image_path, "Folder of the images");
+  app.add_option("--input_path", input_path, "Oriented sparse model");
+  app.add_option("--database_path",
+                 database_path,
+                 "COLMAP database with bayon_interior (scanned frames); "
+                 "optional");
+}
+
+bool OrientedInput::ApplyWorkspace() {
+  if (workspace_path.empty()) return false;
+  CheckDirectoryExists(workspace_path, "--workspace_path");
+  if (image_path.empty()) image_path = workspace_path + "/images";
+  if (input_path.empty()) input_path = workspace_path + "/sparse/adjusted";
+  if (database_path.empty() && fs::exists(workspace_path + "/database.db")) {
+    database_path = workspace_path + "/database.db";
+  }
+  return true;
+}
+
+void OrientedInput::Check() const {
+  CheckDirectoryExists(image_path, "--image_path");
+  CheckDirectoryExists(input_path, "--input_path");
+  if (!database_path.empty()) CheckFileExists(database_path, "--database_path");
+}
+
 std::vector<std::string> SplitList(const std::string& text) {
   std::vector<std::string> items;
   std::stringstream stream(text);

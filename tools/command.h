@@ -52,6 +52,21 @@ std::string WorkspaceLogPath(const std::string& workspace,
 // The workspace a stage file belongs to: W for W/dense/x, W/mesh/x or
 // W/model/x, else the file's own folder.
 std::string WorkspaceOfStageFile(const std::string& path);
+// The inputs of a stage that reads oriented photographs, with a workspace's
+// defaults: images/, sparse/adjusted and database.db (where it exists).
+struct OrientedInput {
+  std::string workspace_path, image_path, input_path, database_path;
+
+  // --workspace_path (described by `workspace_help`), --image_path,
+  // --input_path, --database_path.
+  void AddOptions(CLI::App& app, const std::string& workspace_help);
+  // Fills what was not given from --workspace_path (checking that it
+  // exists); returns whether a workspace was given.
+  bool ApplyWorkspace();
+  // Checks the folders and the database that were given.
+  void Check() const;
+};
+
 // "a, b,c" -> {"a", "b", "c"}: items trimmed of spaces, empty ones dropped.
 std::vector<std::string> SplitList(const std::string& text);
 

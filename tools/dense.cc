@@ -55,7 +55,7 @@ nlohmann::ordered_json ReportToJson(const DenseReport& report,
 }  // namespace
 
 int RunDense(int argc, char** argv) {
-  std::string workspace_path, image_path, input_path, database_path;
+  OrientedInput in;
   std::string output_path, fused_path, report_path, log_path;
   bool overwrite = false;
   DenseOptions options;
@@ -70,16 +70,9 @@ int RunDense(int argc, char** argv) {
       "deviations. Writes a PLY (normals, colours, sx sy sz, num_images, "
       "master_id) and COLMAP's fused.ply + fused.ply.vis beside it.");
   CLI::App& app = command.app();
-  app.add_option("--workspace_path",
-                 workspace_path,
-                 "Workspace: defaults images/, sparse/adjusted, database.db "
-                 "and dense/points.ply under it");
-  app.add_option("--image_path", image_path, "Folder of the images");
-  app.add_option("--input_path", input_path, "Oriented sparse model");
-  app.add_option("--database_path",
-                 database_path,
-                 "COLMAP database with bayon_interior (scanned frames); "
-                 "optional");
+  in.AddOptions(app,
+                "Workspace: defaults images/, sparse/adjusted, database.db "
+                "and dense/points.ply under it");
   app.add_option("--output_path", output_path, "Dense cloud (PLY)");
   app.add_option("--fused_path",
                  fused_path,
@@ -186,24 +179,16 @@ int RunDense(int argc, char** argv) {
   app.add_option(
       "--log_path", log_path, "Log file (default <workspace>/logs/dense.log)");
   if (!command.Parse(argc, argv)) return 0;
-  if (!workspace_path.empty()) {
-    CheckDirectoryExists(workspace_path, "--workspace_path");
-    if (image_path.empty()) image_path = workspace_path + "/images";
-    if (input_path.empty()) input_path = workspace_path + "/sparse/adjusted";
-    if (database_path.empty() && fs::exists(workspace_path + "/database.db")) {
-      database_path = workspace_path + "/database.db";
-    }
-    if (output_path.empty()) output_path = workspace_path + "/dense/points.ply";
+  if (in.ApplyWorkspace() && output_path.empty()) {
+    output_path = in.workspace_path + "/dense/points.ply";
   }
-  if (image_path.empty() || input_path.empty() || output_path.empty()) {
+  if (in.image_path.empty() || in.input_path.empty() || output_path.empty()) {
     ThrowInputError(
         "give --workspace_path, or --image_path, --input_path and "
         "--output_path");
   }
   options.Check();
-  CheckDirectoryExists(image_path, "--image_path");
-  CheckDirectoryExists(input_path, "--input_path");
-  if (!database_path.empty()) CheckFileExists(database_path, "--database_path");
+  in.Check();
   const fs::path output_folder = fs::absolute(output_path).parent_path();
   if (fused_path.empty()) fused_path = (output_folder / "fused.ply").string();
   if (report_path.empty()) {
@@ -218,7 +203,7 @@ int RunDense(int argc, char** argv) {
   }
   command.StartLog(log_path);
 
-  const Scene scene = ReadOrientedModel(input_path, database_path);
+  const Scene scene = ReadOrientedModel(in.input_path, in.database_path);
   const std::vector<MasterSelection> masters = SelectMasters(scene, options);
   for (const MasterSelection& selection : masters) {
     std::string search;
@@ -229,7 +214,7 @@ int RunDense(int argc, char** argv) {
               << ", search images " << search;
   }
   const std::map<image_t, DenseImage> images =
-      LoadDenseImages(scene, masters, image_path, options.highpass_sigma_px);
+      LoadDenseImages(scene, masters, in.image_path, options.highpass_sigma_px);
   DenseReport report;
   std::vector<std::vector<image_t>> seen;
   const PointCloud cloud =

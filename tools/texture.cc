@@ -50,7 +50,7 @@ nlohmann::ordered_json ReportToJson(const TextureReport& r,
 }  // namespace
 
 int RunTexture(int argc, char** argv) {
-  std::string workspace_path, image_path, input_path, database_path;
+  OrientedInput in;
   std::string mesh_path, output_path, log_path,
       preprocess = "highpass_equalize", blend = "view_dependent";
   std::vector<std::string> formats = {"obj", "ply", "wrl", "glb"};
@@ -67,16 +67,9 @@ int RunTexture(int argc, char** argv) {
       "geometry. Writes a texture atlas (PNG) with the model as OBJ + MTL, "
       "PLY, VRML 2.0 and glTF binary, and texture.json.");
   CLI::App& app = command.app();
-  app.add_option("--workspace_path",
-                 workspace_path,
-                 "Workspace: defaults images/, sparse/adjusted, database.db, "
-                 "mesh/mesh.ply and model/ under it");
-  app.add_option("--image_path", image_path, "Folder of the images");
-  app.add_option("--input_path", input_path, "Oriented sparse model");
-  app.add_option("--database_path",
-                 database_path,
-                 "COLMAP database with bayon_interior (scanned frames); "
-                 "optional");
+  in.AddOptions(app,
+                "Workspace: defaults images/, sparse/adjusted, database.db, "
+                "mesh/mesh.ply and model/ under it");
   app.add_option("--mesh_path", mesh_path, "Mesh to texture (PLY, OBJ, OFF)");
   app.add_option("--output_path", output_path, "Folder of the textured model");
   app.add_option("--stem", export_options.stem, "File name of the model files");
@@ -118,17 +111,11 @@ int RunTexture(int argc, char** argv) {
                  log_path,
                  "Log file (default <workspace>/logs/texture.log)");
   if (!command.Parse(argc, argv)) return 0;
-  if (!workspace_path.empty()) {
-    CheckDirectoryExists(workspace_path, "--workspace_path");
-    if (image_path.empty()) image_path = workspace_path + "/images";
-    if (input_path.empty()) input_path = workspace_path + "/sparse/adjusted";
-    if (database_path.empty() && fs::exists(workspace_path + "/database.db")) {
-      database_path = workspace_path + "/database.db";
-    }
-    if (mesh_path.empty()) mesh_path = workspace_path + "/mesh/mesh.ply";
-    if (output_path.empty()) output_path = workspace_path + "/model";
+  if (in.ApplyWorkspace()) {
+    if (mesh_path.empty()) mesh_path = in.workspace_path + "/mesh/mesh.ply";
+    if (output_path.empty()) output_path = in.workspace_path + "/model";
   }
-  if (image_path.empty() || input_path.empty() || mesh_path.empty() ||
+  if (in.image_path.empty() || in.input_path.empty() || mesh_path.empty() ||
       output_path.empty()) {
     ThrowInputError(
         "give --workspace_path, or --image_path, --input_path, --mesh_path "
@@ -153,10 +140,8 @@ int RunTexture(int argc, char** argv) {
           "--formats: unknown '", format, "' (expected obj, ply, wrl, glb)");
     }
   }
-  CheckDirectoryExists(image_path, "--image_path");
-  CheckDirectoryExists(input_path, "--input_path");
+  in.Check();
   CheckFileExists(mesh_path, "--mesh_path");
-  if (!database_path.empty()) CheckFileExists(database_path, "--database_path");
   if (export_options.stem.empty() ||
       export_options.stem.find_first_of("/\\") != std::string::npos ||
       export_options.stem == "." || export_options.stem == "..") {
@@ -179,11 +164,11 @@ int RunTexture(int argc, char** argv) {
   }
   command.StartLog(log_path);
 
-  const Scene scene = ReadOrientedModel(input_path, database_path);
+  const Scene scene = ReadOrientedModel(in.input_path, in.database_path);
   const TriangleMesh mesh = ReadMesh(mesh_path);
   Timer timer;
   const std::vector<TextureImage> images =
-      LoadTextureImages(scene, image_path, options);
+      LoadTextureImages(scene, in.image_path, options);
   const double seconds_load = timer.Seconds();
   TexturedMesh textured = MapTexture(mesh, images, options);
   textured.report.seconds_load = seconds_load;
