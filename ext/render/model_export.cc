@@ -6,6 +6,7 @@
 #include "ext/core/file_util.h"
 #include "ext/image/image_io.h"
 
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -182,11 +183,20 @@ std::string GlbBytes(const TriangleMesh& mesh,
   // each view starts on a 4-byte boundary.
   std::string bin;
   const size_t num_wedges = wedges.vertex.size();
+  // Positions are single precision: relative to the model's centre, which
+  // goes into the node's translation, they keep a tenth of a millimetre on
+  // a 1 km object wherever its datum lies (UTM, ECEF).
+  Eigen::AlignedBox3d box;
+  for (size_t w = 0; w < num_wedges; ++w) {
+    box.extend(mesh.vertices.positions[wedges.vertex[w]]);
+  }
+  const Eigen::Vector3d center =
+      num_wedges > 0 ? Eigen::Vector3d(box.center()) : Eigen::Vector3d::Zero();
   Eigen::Vector3f min_position = Eigen::Vector3f::Constant(HUGE_VALF);
   Eigen::Vector3f max_position = -min_position;
   for (size_t w = 0; w < num_wedges; ++w) {
     const Eigen::Vector3f p =
-        mesh.vertices.positions[wedges.vertex[w]].cast<float>();
+        (mesh.vertices.positions[wedges.vertex[w]] - center).cast<float>();
     min_position = min_position.cwiseMin(p);
     max_position = max_position.cwiseMax(p);
     AppendBytes(&bin, p.data(), 3 * sizeof(float));
@@ -219,6 +229,9 @@ std::string GlbBytes(const TriangleMesh& mesh,
     // (x, y, z) to (x, z, -y). The positions themselves stay in the datum.
     const double s = std::sqrt(0.5);
     node["rotation"] = {-s, 0.0, 0.0, s};
+    node["translation"] = {center.x(), center.z(), -center.y()};
+  } else {
+    node["translation"] = {center.x(), center.y(), center.z()};
   }
   json["nodes"] = ordered_json::array({node});
   json["meshes"] = ordered_json::array(
@@ -936,7 +949,43 @@ TexturedModel ReadGlbChecked(const std::string& path) {
   if (!glb.json.contains("meshes") || glb.json.at("meshes").empty()) {
     accessors.Fail("no meshes");
   }
+  // Each mesh's offset: the translation of a node that draws it, in the
+  // frame before the node's rotation (bayon's files: the model's centre in
+  // the datum, the rotation only turning z-up to y-up, which the positions
+  // returned here do not take).
+  std::vector<Eigen::Vector3d> offsets(glb.json.at("meshes").size(),
+                                       Eigen::Vector3d::Zero());
+  try {
+    for (const nlohmann::json& node :
+         glb.json.value("nodes", nlohmann::json::array())) {
+      if (!node.contains("mesh") || !node.contains("translation")) continue;
+      const size_t m = node.at("mesh").get<size_t>();
+      if (m >= offsets.size())
+        accessors.Fail("a node draws mesh ", m, " that is not there");
+      const auto& t = node.at("translation");
+      Eigen::Vector3d translation(
+          t.at(0).get<double>(), t.at(1).get<double>(), t.at(2).get<double>());
+      Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+      if (node.contains("rotation")) {
+        const auto& q = node.at("rotation");  // x, y, z, w
+        rotation = Eigen::Quaterniond(q.at(3).get<double>(),
+                                      q.at(0).get<double>(),
+                                      q.at(1).get<double>(),
+                                      q.at(2).get<double>());
+        if (!(rotation.norm() > 0.5))
+          accessors.Fail("a node's rotation is not a unit quaternion");
+        rotation.normalize();
+      }
+      offsets[m] = rotation.inverse() * translation;
+      if (!offsets[m].allFinite())
+        accessors.Fail("a node's translation is not finite");
+    }
+  } catch (const nlohmann::json::exception& error) {
+    accessors.Fail("invalid node: ", error.what());
+  }
+  size_t mesh_index = 0;
   for (const nlohmann::json& gltf_mesh : glb.json.at("meshes")) {
+    const Eigen::Vector3d offset = offsets[mesh_index++];
     for (const nlohmann::json& primitive : gltf_mesh.at("primitives")) {
       ++num_primitives;
       const int mode = primitive.value("mode", 4);
@@ -950,8 +999,10 @@ TexturedModel ReadGlbChecked(const std::string& path) {
       const size_t first = mesh.NumVertices();
       const size_t count = positions.size() / 3;
       for (size_t i = 0; i < count; ++i) {
-        mesh.vertices.positions.emplace_back(
-            positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
+        mesh.vertices.positions.push_back(
+            Eigen::Vector3d(
+                positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]) +
+            offset);
       }
       // The base colour texture and the texture coordinate set it uses.
       int texcoord_set = 0, image = -1;

@@ -9,7 +9,9 @@
 //   comment `TextureFile NAME` (MeshLab's convention).
 // - VRML 2.0 (.wrl): one Shape with an IndexedFaceSet, its texCoord and
 //   texCoordIndex, and an ImageTexture naming the PNG, as in the paper.
-// - glTF 2.0 binary (.glb): one mesh, one primitive, positions, texture
+// - glTF 2.0 binary (.glb): one mesh, one primitive, positions (single
+//   precision, relative to the model's centre, which is the node's
+//   translation, so that a georeferenced datum keeps its precision), texture
 //   coordinates and 32-bit indices, the PNG embedded in the binary chunk;
 //   what web viewers (three.js) and today's tools read.
 //

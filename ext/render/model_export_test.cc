@@ -95,7 +95,7 @@ void ExpectSameModel(const TexturedModel& expected,
           expected.mesh.vertices.positions[expected.mesh.faces[f][k]];
       const Eigen::Vector3d& q =
           actual.mesh.vertices.positions[actual.mesh.faces[f][k]];
-      EXPECT_LE((p - q).norm(), tolerance * p.norm()) << "face " << f;
+      EXPECT_LE((p - q).norm(), tolerance * (p.norm() + 1.0)) << "face " << f;
       EXPECT_LE((expected.mesh.face_texcoords[f][k] -
                  actual.mesh.face_texcoords[f][k])
                     .norm(),
@@ -163,6 +163,25 @@ TEST(ModelExport, EachFormatRoundTrips) {
   EXPECT_EQ(ReadTexturedModel(dir + "/model.glb").mesh.NumVertices(), 24u);
 }
 
+TEST(ModelExport, GlbKeepsAGeoreferencedModelToATenthOfAMillimetre) {
+  // A UTM-like datum: single-precision coordinates there step by 6 cm.
+  TexturedModel model = GridModel();
+  for (auto& p : model.mesh.vertices.positions) {
+    p += Eigen::Vector3d(500123.4567, 5250987.6543, 412.3456);
+  }
+  for (bool y_up : {true, false}) {
+    const std::string dir = testing::TempDir("model_export_utm");
+    ModelExportOptions options;
+    options.obj = options.ply = options.vrml = false;
+    options.gltf_y_up = y_up;
+    WriteTexturedModel(model, dir, options);
+    // (The tolerance is relative to the coordinates' size: 0.1 mm.)
+    ExpectSameModel(model,
+                    ReadTexturedModel(dir + "/model.glb"),
+                    1e-4 / model.mesh.vertices.positions[0].norm());
+  }
+}
+
 TEST(ModelExport, GltfSplitsVerticesOnlyWhereTexcoordsDiffer) {
   const TexturedModel grid = GridModel();
   const std::string dir = testing::TempDir("model_export_grid");
@@ -209,8 +228,15 @@ TEST(ModelExport, GlbIsWellFormed) {
   EXPECT_EQ(texcoords["count"], 24);
   EXPECT_EQ(indices["count"], 36);
   EXPECT_EQ(indices["componentType"], 5125);
-  EXPECT_NEAR(positions["min"][0].get<double>(), 10.1, 1e-6);
-  EXPECT_NEAR(positions["max"][2].get<double>(), 4.2, 1e-6);
+  // Positions relative to the model's centre, the node's translation (in
+  // glTF's y-up frame: datum x, z, -y).
+  const nlohmann::json& translation = json["nodes"][0]["translation"];
+  EXPECT_NEAR(positions["min"][0].get<double>() + translation[0].get<double>(),
+              10.1,
+              1e-6);
+  EXPECT_NEAR(positions["max"][2].get<double>() + translation[1].get<double>(),
+              4.2,
+              1e-6);
   for (const nlohmann::json& view : json["bufferViews"]) {
     EXPECT_EQ(view["byteOffset"].get<size_t>() % 4, 0u);
     EXPECT_LE(
