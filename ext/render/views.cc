@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <set>
 
 namespace bayon {
 namespace {
@@ -169,6 +170,7 @@ std::vector<Viewpoint> StationViewpoints(
     int max_image_size) {
   CheckOption(max_image_size >= 0, "--max_image_size", ">= 0", max_image_size);
   std::vector<Viewpoint> viewpoints;
+  std::set<std::string> names;
   for (const auto& [image_id, image] : scene.images) {
     const Camera* found = scene.cameras.Find(image.camera_id);
     if (found == nullptr) {
@@ -191,6 +193,12 @@ std::vector<Viewpoint> StationViewpoints(
     }
     Viewpoint viewpoint;
     viewpoint.name = ViewNameOfImage(image.name);
+    // `a/b.jpg` and `a_b.jpg`, or `x.jpg` and `x.tif`, would share a name
+    // and one picture overwrite the other: the later one gets the image id.
+    if (!names.insert(viewpoint.name).second) {
+      viewpoint.name += "_" + std::to_string(image.image_id);
+      names.insert(viewpoint.name);
+    }
     viewpoint.view = view;
     viewpoint.convergence_depth_m = median;
     viewpoint.nearest_depth_m = nearest;

@@ -182,6 +182,16 @@ TEST(Views, StationsAreThePhotographsThatSeeTheModel) {
   EXPECT_NEAR(viewpoints[0].nearest_depth_m, 30, 1e-9);
   EXPECT_NEAR(viewpoints[0].convergence_depth_m, 31, 1.0 + 1e-9);
   EXPECT_EQ(StationViewpoints(scene, points, 0)[0].view.camera.width, 4000u);
+
+  // Names that would share a picture: the later one gets its image id.
+  Image twin = facing;
+  twin.image_id = 3;
+  twin.name = "day1_IMG_0001.tif";
+  scene.images.Set(3, twin);
+  const std::vector<Viewpoint> both = StationViewpoints(scene, points, 1000);
+  ASSERT_EQ(both.size(), 2u);
+  EXPECT_EQ(both[0].name, "day1_IMG_0001");
+  EXPECT_EQ(both[1].name, "day1_IMG_0001_3");
 }
 
 }  // namespace
