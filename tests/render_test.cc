@@ -307,6 +307,23 @@ TEST(RenderCommand, RefusesBadInputWithOneLine) {
       {"--model_path", model, "--output_path", out, "--viewpoints", "stations"},
       "--input_path",
       out);
+  // A view too large to render (16000 x 16000 at 8 x 8 samples a pixel):
+  // refused before any work instead of running out of memory.
+  const testing::CommandResult huge = testing::RunBayon({"render",
+                                                         "--model_path",
+                                                         model,
+                                                         "--output_path",
+                                                         out,
+                                                         "--width",
+                                                         "16000",
+                                                         "--height",
+                                                         "16000",
+                                                         "--supersampling",
+                                                         "8"});
+  EXPECT_EQ(huge.exit_code, 2) << huge.output;
+  EXPECT_NE(huge.LastLine().find("too large to render"), std::string::npos)
+      << huge.LastLine();
+  EXPECT_FALSE(fs::exists(out));
   // A mesh without texture: textured mode asked for by name is refused; by
   // default it is left out.
   TriangleMesh plain = ColouredBox().mesh;

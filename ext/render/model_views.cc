@@ -203,6 +203,26 @@ ModelRenderSummary RenderModelViews(
     const ModelRenderOptions& options,
     const std::function<void(const std::string&, const cv::Mat&)>& sink) {
   options.Check(!model.atlas.empty() && model.mesh.HasTexcoords());
+  // Each view is rendered at supersampling times its size (three floats a
+  // sample, for the shaded and wireframe modes): refuse before any work
+  // what would not fit in memory (2^28 samples, 3 GB).
+  for (const Viewpoint& viewpoint : viewpoints) {
+    const double samples = double(viewpoint.view.camera.width) *
+                           double(viewpoint.view.camera.height) *
+                           options.supersampling * options.supersampling;
+    if (samples > double(1 << 28)) {
+      ThrowInputError("view ",
+                      viewpoint.name,
+                      ": ",
+                      viewpoint.view.camera.width,
+                      " x ",
+                      viewpoint.view.camera.height,
+                      " pixels at --supersampling ",
+                      options.supersampling,
+                      " is too large to render (lower --supersampling, "
+                      "--max_image_size or --width/--height)");
+    }
+  }
   Timer timer;
   ModelRenderSummary summary;
   const ModelViewRenderer renderer(model, options);
