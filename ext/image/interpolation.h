@@ -26,6 +26,7 @@
 // bicubic reads 6 x 6, x - 0.5 in [2, width - 3).
 #pragma once
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include <string>
@@ -93,6 +94,29 @@ inline bool SampleBilinear(const cv::Mat& image,
   const float* r1 = image.ptr<float>(iy + 1) + ix;
   *value = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
            fy * ((1 - fx) * r1[0] + fx * r1[1]);
+  return true;
+}
+
+// The same for an 8-bit BGR image (CV_8UC3), each channel in 0..255.
+inline bool SampleBilinear(const cv::Mat& bgr,
+                           double x,
+                           double y,
+                           Eigen::Vector3f* color) {
+  const double u = x - 0.5;
+  const double v = y - 0.5;
+  if (!(u >= 0.0 && v >= 0.0 && u < bgr.cols - 1.0 && v < bgr.rows - 1.0)) {
+    return false;
+  }
+  const int ix = static_cast<int>(u);
+  const int iy = static_cast<int>(v);
+  const float fx = static_cast<float>(u - ix);
+  const float fy = static_cast<float>(v - iy);
+  const cv::Vec3b* r0 = bgr.ptr<cv::Vec3b>(iy) + ix;
+  const cv::Vec3b* r1 = bgr.ptr<cv::Vec3b>(iy + 1) + ix;
+  for (int c = 0; c < 3; ++c) {
+    (*color)[c] = (1 - fy) * ((1 - fx) * r0[0][c] + fx * r0[1][c]) +
+                  fy * ((1 - fx) * r1[0][c] + fx * r1[1][c]);
+  }
   return true;
 }
 

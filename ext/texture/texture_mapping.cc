@@ -5,6 +5,7 @@
 #include "ext/core/parallel.h"
 #include "ext/core/progress.h"
 #include "ext/image/image_io.h"
+#include "ext/image/interpolation.h"
 #include "ext/image/radiometry.h"
 #include "ext/render/mesh_renderer.h"
 
@@ -173,6 +174,25 @@ std::vector<EdgeFace> SortedEdges(const TriangleMesh& mesh) {
   return edges;
 }
 
+// An edge with exactly two faces (manifold, not on a boundary).
+struct TwoFaceEdge {
+  int a, b;  // its vertices
+  int f, g;  // its faces
+};
+
+std::vector<TwoFaceEdge> TwoFaceEdges(const std::vector<EdgeFace>& sorted) {
+  std::vector<TwoFaceEdge> pairs;
+  for (size_t i = 0; i + 1 < sorted.size(); ++i) {
+    if (sorted[i].SameEdge(sorted[i + 1]) &&
+        !(i > 0 && sorted[i - 1].SameEdge(sorted[i])) &&
+        !(i + 2 < sorted.size() && sorted[i + 2].SameEdge(sorted[i]))) {
+      pairs.push_back(
+          {sorted[i].a, sorted[i].b, sorted[i].face, sorted[i + 1].face});
+    }
+  }
+  return pairs;
+}
+
 struct Chart {
   int image = -1;  // the optimal image; -1: the faces no photograph sees
   std::vector<int> faces;
@@ -220,22 +240,7 @@ cv::Size PackCharts(std::vector<Chart>* charts) {
 bool SampleColor(const cv::Mat& image,
                  const Eigen::Vector2d& pixel,
                  Eigen::Vector3f* color) {
-  const double u = pixel.x() - 0.5;
-  const double v = pixel.y() - 0.5;
-  if (!(u >= 0.0 && v >= 0.0 && u < image.cols - 1.0 && v < image.rows - 1.0)) {
-    return false;
-  }
-  const int ix = static_cast<int>(u);
-  const int iy = static_cast<int>(v);
-  const float fx = static_cast<float>(u - ix);
-  const float fy = static_cast<float>(v - iy);
-  const cv::Vec3b* r0 = image.ptr<cv::Vec3b>(iy) + ix;
-  const cv::Vec3b* r1 = image.ptr<cv::Vec3b>(iy + 1) + ix;
-  for (int c = 0; c < 3; ++c) {
-    (*color)[c] = (1 - fy) * ((1 - fx) * r0[0][c] + fx * r0[1][c]) +
-                  fy * ((1 - fx) * r1[0][c] + fx * r1[1][c]);
-  }
-  return true;
+  return SampleBilinear(image, pixel.x(), pixel.y(), color);
 }
 
 // Each face no photograph sees has a cell of this many texels square in the
@@ -531,16 +536,11 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   std::vector<int> source = best;
   std::vector<float> source_area = best_area;
   // Faces across each manifold edge (-1: none).
+  const std::vector<TwoFaceEdge> two_face_edges = TwoFaceEdges(edges);
   std::vector<std::array<int, 3>> neighbors(num_faces, {-1, -1, -1});
-  for (size_t i = 0; i + 1 < edges.size(); ++i) {
-    if (!edges[i].SameEdge(edges[i + 1]) ||
-        (i > 0 && edges[i - 1].SameEdge(edges[i])) ||
-        (i + 2 < edges.size() && edges[i + 2].SameEdge(edges[i]))) {
-      continue;  // boundary or non-manifold
-    }
+  for (const TwoFaceEdge& e : two_face_edges) {
     for (const auto& [f, g] :
-         {std::make_pair(edges[i].face, edges[i + 1].face),
-          std::make_pair(edges[i + 1].face, edges[i].face)}) {
+         {std::make_pair(e.f, e.g), std::make_pair(e.g, e.f)}) {
       for (int& slot : neighbors[f]) {
         if (slot < 0) {
           slot = g;
@@ -858,15 +858,8 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   // The seam measure: the atlas at each chart-border edge's midpoint, seen
   // from both sides.
   double seam_sum = 0;
-  for (size_t i = 0; i + 1 < edges.size(); ++i) {
-    const EdgeFace& e = edges[i];
-    const EdgeFace& o = edges[i + 1];
-    if (!e.SameEdge(o) || (i + 2 < edges.size() && edges[i + 2].SameEdge(e))) {
-      continue;  // a boundary or non-manifold edge
-    }
-    if (i > 0 && edges[i - 1].SameEdge(e)) continue;
-    if (source[e.face] < 0 || source[o.face] < 0 ||
-        source[e.face] == source[o.face]) {
+  for (const TwoFaceEdge& e : two_face_edges) {
+    if (source[e.f] < 0 || source[e.g] < 0 || source[e.f] == source[e.g]) {
       continue;
     }
     auto midpoint = [&](int face) {
@@ -878,8 +871,8 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       return Eigen::Vector2d(0.5 * sum);
     };
     Eigen::Vector3f a, b;
-    if (!SampleColor(atlas, midpoint(e.face), &a) ||
-        !SampleColor(atlas, midpoint(o.face), &b)) {
+    if (!SampleColor(atlas, midpoint(e.f), &a) ||
+        !SampleColor(atlas, midpoint(e.g), &b)) {
       continue;
     }
     seam_sum += (a - b).cwiseAbs().mean();
