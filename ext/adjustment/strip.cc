@@ -980,7 +980,10 @@ class StripBuilder {
     }
     std::vector<std::vector<TrackElement>> tracks(block_.points.size());
     for (const BlockObservation& o : block_.observations) {
-      if (!o.active || block_.points[o.point_idx].kind != PointKind::kTie) {
+      // Manual tie points measured in control/observations.txt are tie
+      // points of the block but no keypoints of the model's images.
+      if (!o.active || block_.points[o.point_idx].kind != PointKind::kTie ||
+          o.point2D_idx == kInvalidPoint2DIdx) {
         continue;
       }
       tracks[o.point_idx].push_back(
