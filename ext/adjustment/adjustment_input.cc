@@ -351,8 +351,10 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
     CheckCameraCalibration(camera, source.source);
     input.cameras.push_back(source);
   }
-  // Interior orientations of scanned film frames (digital images use the
-  // camera's default frame).
+  // Interior orientations of scanned film frames. Digital images use the
+  // default frame of the camera just chosen, not their bayon_interior row,
+  // which holds the default frame of the database's camera (pitch 1 for a
+  // COLMAP camera, where the conversion above assumes 36 mm / width).
   SetInteriorFrames(&database, &block_scene);
 
   input.block = BlockFromScene(block_scene, options.image_sigma_px);

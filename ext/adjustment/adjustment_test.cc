@@ -1,13 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/adjustment/adjustment.h"
 
+#include "ext/adjustment/adjustment_input.h"
+#include "ext/colmap/bayon_tables.h"
+#include "ext/colmap/database.h"
+#include "ext/colmap/model_io.h"
 #include "ext/synth/points_scene.h"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <random>
+
+#include "tests/testing.h"
 
 namespace bayon {
 namespace {
@@ -285,6 +292,116 @@ TEST(Adjustment, VarianceComponentsFindEachGroupsPrecision) {
   EXPECT_NEAR(result.precision.sigma0 / block.sigma0_px, 1.0, 0.1);
   // Good observations stay: at most 0.5 % rejected.
   EXPECT_LE(result.rejected.size(), 0.005 * block.observations.size());
+}
+
+// Regression (the temple ring: 81 % centre error instead of 0.2 % once
+// `bayon interior` had run): a digital image's bayon_interior row holds the
+// default frame of the database's COLMAP camera, whose pitch is 1, while
+// adjust works with that camera converted to BROWN_BEYER, whose pitch is
+// 36 mm / width. The block must give such an image the converted camera's
+// default frame; a measured frame (film scan) still replaces it. A PINHOLE
+// camera with fx != fy and exact keypoints: at the true poses and points the
+// residuals are only the conversion's and the keypoints' float rounding.
+TEST(Adjustment, DigitalInteriorRowsKeepTheAdjustedCamerasFrame) {
+  PointsSceneOptions scene_options;
+  scene_options.num_views = 8;
+  scene_options.num_points = 300;
+  scene_options.ring_radius_m = 6.0;
+  scene_options.keypoint_noise_px = 0;
+  scene_options.seed = 3;
+  Scene scene = SynthesizePointsScene(scene_options).scene;
+  ASSERT_EQ(scene.cameras.size(), 1u);
+  const Camera& true_camera = scene.cameras.begin()->second;
+  Camera camera;
+  camera.camera_id = true_camera.camera_id;
+  camera.model_id = CameraModelId::kPinhole;
+  camera.width = true_camera.width;
+  camera.height = true_camera.height;
+  const double f = true_camera.MeanFocalLengthPx();
+  camera.params = {f, 1.01 * f, 0.5 * camera.width + 3, 0.5 * camera.height};
+  camera.has_prior_focal_length = true;
+  scene.cameras.at(camera.camera_id) = camera;
+
+  const std::string dir = testing::TempDir("adjustment_digital_interior");
+  const std::string database_path = dir + "/database.db";
+  {
+    Database database(database_path, Database::Mode::kCreate);
+    database.WriteCamera(camera, /*use_camera_id=*/true);
+    for (auto& [image_id, image] : scene.images) {
+      std::vector<Eigen::Vector2d> keypoints;
+      for (Point2D& point2D : image.points2D) {
+        if (point2D.HasPoint3D()) {
+          point2D.xy = camera.ImgFromCam(
+              image.cam_from_world * scene.points3D.at(point2D.point3D_id).xyz);
+        }
+        keypoints.push_back(point2D.xy);
+      }
+      DatabaseImage row;
+      row.image_id = image_id;
+      row.name = image.name;
+      row.camera_id = camera.camera_id;
+      database.WriteImage(row, /*use_image_id=*/true);
+      database.WriteKeypoints(image_id, KeypointsFromXY(keypoints));
+      // What `bayon interior` writes for a digital image.
+      InteriorRecord interior;
+      interior.frame = camera.DefaultFrame();
+      interior.method = kDigitalInteriorMethod;
+      WriteInterior(&database, image_id, interior);
+    }
+  }
+  std::filesystem::create_directories(dir + "/model");
+  WriteModel(scene, dir + "/model", ModelFormat::kBinary);
+
+  // One film scan among them: its measured frame (here the default frame of
+  // the converted camera, shifted by 2 px) is the image's own.
+  const image_t scan_id = scene.images.begin()->first;
+  AdjustmentInputOptions options;
+  options.tie_points = TiePointSource::kModel;
+  options.datum.datum = DatumType::kFree;
+  const Camera converted =
+      LoadAdjustmentInput(database_path, dir + "/model", "", options)
+          .block.cameras[0]
+          .camera;
+  ASSERT_EQ(converted.model_id, CameraModelId::kBrownBeyer);
+  // The conversion's pitch differs from the row's: the case of the bug.
+  ASSERT_GT(std::abs(converted.DefaultFrame().MeanPitchMm() - 1.0), 0.5);
+  ImageFrame scan_frame = converted.DefaultFrame();
+  scan_frame.pixel_from_frame(0, 2) += 2.0;
+  {
+    Database database(database_path, Database::Mode::kReadWrite);
+    InteriorRecord interior;
+    interior.frame = scan_frame;
+    interior.method = "virtual_fiducials";
+    WriteInterior(&database, scan_id, interior);
+  }
+
+  AdjustmentInput input =
+      LoadAdjustmentInput(database_path, dir + "/model", "", options);
+  const Camera& block_camera = input.block.cameras[0].camera;
+  for (const BlockImage& image : input.block.images) {
+    const ImageFrame expected =
+        image.image_id == scan_id ? scan_frame : block_camera.DefaultFrame();
+    EXPECT_LT((image.frame.pixel_from_frame - expected.pixel_from_frame)
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-12)
+        << image.name;
+  }
+  const std::vector<Eigen::Vector2d> residuals = ImageResiduals(&input.block);
+  int num_checked = 0;
+  for (size_t o = 0; o < residuals.size(); ++o) {
+    const BlockImage& image =
+        input.block.images[input.block.observations[o].image_idx];
+    if (image.image_id == scan_id) {
+      // The scan's frame is 2 px off the keypoints by construction.
+      EXPECT_NEAR(residuals[o].x(), 2.0, 0.01);
+      continue;
+    }
+    ASSERT_TRUE(residuals[o].allFinite());
+    EXPECT_LT(residuals[o].norm(), 0.01) << image.name;
+    ++num_checked;
+  }
+  EXPECT_GT(num_checked, 400);
 }
 
 }  // namespace

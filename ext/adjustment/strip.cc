@@ -155,10 +155,15 @@ class StripBuilder {
       image.camera_idx = camera_idxs.at(row.camera_id);
       image.keypoints = database.ReadKeypoints(row.image_id);
       image.num_keypoints = static_cast<int>(image.keypoints.rows());
+      // A measured frame (film scans) replaces the camera's default; a
+      // digital image's row does not, as it may hold the default frame of
+      // another camera (InteriorRecord::MeasuredFrame()).
       auto interior = interiors.find(row.image_id);
-      image.frame = interior != interiors.end()
-                        ? interior->second.frame
-                        : cameras_[image.camera_idx].DefaultFrame();
+      const std::optional<ImageFrame> measured =
+          interior != interiors.end() ? interior->second.MeasuredFrame()
+                                      : std::nullopt;
+      image.frame =
+          measured ? *measured : cameras_[image.camera_idx].DefaultFrame();
       image.rays.resize(image.keypoints.rows());
       image.ray_done.assign(image.keypoints.rows(), false);
       image_idxs_[row.image_id] = static_cast<int>(images_.size());

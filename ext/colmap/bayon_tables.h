@@ -71,6 +71,14 @@ std::optional<CalibrationRecord> ReadCalibration(Database* database,
                                                  camera_t camera_id);
 std::map<camera_t, CalibrationRecord> ReadAllCalibrations(Database* database);
 
+// The bayon_interior method of a digital image's row. Its frame is no
+// measurement: it is the DefaultFrame() of the camera `bayon interior` saw
+// (for a COLMAP camera, which has no pixel pitch, a pitch of 1), recorded
+// for the report. A reader gives such an image the default frame of the
+// camera it works with (InteriorRecord::MeasuredFrame()), which may have
+// another pitch.
+inline constexpr const char kDigitalInteriorMethod[] = "digital";
+
 // bayon_interior: each image's interior orientation (image frame), the
 // affine map between image millimetres and pixels, with how it was found.
 struct InteriorRecord {
@@ -78,6 +86,11 @@ struct InteriorRecord {
   std::string method;          // "digital" or "virtual_fiducials"
   double rms_residual_px = 0;  // line-fit residual for film scans
   double frame_rotation_deg = 0;
+
+  // The frame that replaces the camera's default frame for this image
+  // (Scene's Image::frame): the stored one, except for a digital image,
+  // which has none of its own (nullopt: the camera's DefaultFrame()).
+  std::optional<ImageFrame> MeasuredFrame() const;
 };
 extern const BayonTable kInteriorTable;
 void WriteInterior(Database* database,
@@ -86,9 +99,10 @@ void WriteInterior(Database* database,
 std::optional<InteriorRecord> ReadInterior(Database* database,
                                            image_t image_id);
 std::map<image_t, InteriorRecord> ReadAllInteriors(Database* database);
-// Gives each image of `scene` that has an interior orientation in the
-// database (matched by name: a model's ids need not be the database's) its
-// frame; the others keep theirs (digital images: the camera's default).
+// Gives each image of `scene` that has a measured interior orientation in
+// the database (matched by name: a model's ids need not be the database's;
+// InteriorRecord::MeasuredFrame()) its frame; the others keep theirs
+// (digital images: the default frame of the scene's camera).
 void SetInteriorFrames(Database* database, Scene* scene);
 
 }  // namespace bayon

@@ -53,7 +53,7 @@ std::string DescribeInterior(const ImageInteriorReport& report) {
   }
   const VirtualFiducialResult& f = report.fiducials;
   if (report.status == InteriorStatus::kDone &&
-      report.record.method == "digital") {
+      report.record.method == kDigitalInteriorMethod) {
     const ImageFrame& frame = report.record.frame;
     line << "digital, pixel " << 1000 * frame.MeanPitchMm()
          << " um, frame centre (" << frame.pixel_from_frame(0, 2) << ", "
@@ -168,7 +168,7 @@ void OrientJob(const InteriorOptions& options, Job* job) {
   ImageInteriorReport& report = job->report;
   if (!options.film_scan) {
     report.record.frame = job->camera.DefaultFrame();
-    report.record.method = "digital";
+    report.record.method = kDigitalInteriorMethod;
     report.status = InteriorStatus::kDone;
   } else {
     report.fiducials = MeasureFilmFrame(job->path, options.fiducials);

@@ -8,7 +8,10 @@
 // - Digital images (film_scan off): the frame follows from the camera's
 //   pixel pitch and the image centre (Camera::DefaultFrame(); pitch 1, i.e.
 //   image coordinates in pixels, for COLMAP cameras, which have none);
-//   method "digital".
+//   method "digital". The row records that frame for the report; later
+//   stages give a digital image the default frame of the camera they work
+//   with (InteriorRecord::MeasuredFrame()), e.g. adjust's BROWN_BEYER
+//   conversion of a COLMAP camera, whose pitch is not 1.
 // - Scanned film (film_scan on): the frame of each scan is measured by
 //   virtual fiducials (virtual_fiducials.h); method "virtual_fiducials",
 //   with the edges' residual RMS and the frame's rotation in the scan. The
