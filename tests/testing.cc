@@ -26,9 +26,9 @@ std::string Setting(const char* name, const char* fallback) {
   return env && *env ? env : fallback;
 }
 
-std::string BayonBin() { return Setting("BAYON_BIN", BAYON_DEFAULT_BIN); }
-
 }  // namespace
+
+std::string BayonBin() { return Setting("BAYON_BIN", BAYON_DEFAULT_BIN); }
 
 std::string DataDir() {
   const std::string dir = Setting("BAYON_DATA_DIR", BAYON_DEFAULT_DATA_DIR);

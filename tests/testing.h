@@ -33,6 +33,8 @@ struct CommandResult {
 
 // Runs a program with arguments, no shell, capturing its output.
 CommandResult RunCommand(const std::vector<std::string>& argv);
+// The bayon binary built with these tests ($BAYON_BIN).
+std::string BayonBin();
 // Runs the bayon binary built with these tests ($BAYON_BIN).
 CommandResult RunBayon(const std::vector<std::string>& args);
 // Runs stock COLMAP ($BAYON_COLMAP or `colmap`).

@@ -43,7 +43,11 @@ class FileLogSink : public google::LogSink {
   std::mutex mutex_;
 };
 
+bool check_only = false;
+
 }  // namespace
+
+void CommandLine::SetCheckOnly(bool value) { check_only = value; }
 
 CommandLine::CommandLine(const std::string& command,
                          const std::string& description)
@@ -64,7 +68,7 @@ bool CommandLine::Parse(int argc, char** argv) {
     app_.exit(error);
     return false;
   }
-  return true;
+  return !check_only;
 }
 
 void CommandLine::StartLog(const std::string& log_path) {

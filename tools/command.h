@@ -28,6 +28,12 @@ class CommandLine {
   // propagate as CLI::ParseError; main() makes them one line and exit code 2.
   bool Parse(int argc, char** argv);
 
+  // While set, Parse() returns false after a successful parse, so a command
+  // checks its options and does nothing else: `bayon pipeline` runs every
+  // stage this way first, so that a typo in a config stops it before any
+  // work starts.
+  static void SetCheckOnly(bool check_only);
+
   // Starts logging to `log_path` (appending) and writes the effective options
   // next to it as <stem>.options. Empty `log_path` logs to stderr only.
   void StartLog(const std::string& log_path);

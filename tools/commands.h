@@ -28,5 +28,8 @@ int RunRefineKeypoints(int argc, char** argv);
 int RunRender(int argc, char** argv);
 int RunTexture(int argc, char** argv);
 int RunViewer(int argc, char** argv);
+int RunPipeline(int argc, char** argv);
+int RunCompareColmap(int argc, char** argv);
+int RunReport(int argc, char** argv);
 
 }  // namespace bayon
