@@ -7,6 +7,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/render/model_export.h"
+#include "ext/report/html.h"
 #include "tools/command.h"
 #include "tools/commands.h"
 
@@ -49,56 +50,6 @@ struct ViewerOptions {
         fov_deg > 1 && fov_deg < 170, "--fov_deg", "in (1, 170)", fov_deg);
   }
 };
-
-std::string Base64(const std::string& bytes) {
-  static const char kAlphabet[] =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const uint32_t triple = uint32_t(uint8_t(bytes[i])) << 16 |
-                            uint32_t(uint8_t(bytes[i + 1])) << 8 |
-                            uint8_t(bytes[i + 2]);
-    out += kAlphabet[triple >> 18];
-    out += kAlphabet[(triple >> 12) & 63];
-    out += kAlphabet[(triple >> 6) & 63];
-    out += kAlphabet[triple & 63];
-  }
-  if (i < bytes.size()) {
-    const bool two = i + 1 < bytes.size();
-    const uint32_t triple = uint32_t(uint8_t(bytes[i])) << 16 |
-                            (two ? uint32_t(uint8_t(bytes[i + 1])) << 8 : 0);
-    out += kAlphabet[triple >> 18];
-    out += kAlphabet[(triple >> 12) & 63];
-    out += two ? kAlphabet[(triple >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
-}
-
-std::string HtmlEscape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 // The page: options as JSON, the model as base64 and the bundled script, all
 // inline. The model is embedded rather than referenced because browsers block

@@ -35,7 +35,10 @@ std::string HtmlEscape(const std::string& text) {
         out += "&#39;";
         break;
       default:
-        out += c;
+        // Control characters are not allowed in XML 1.0 (inline SVG).
+        if (static_cast<unsigned char>(c) >= 0x20 || c == '\n' || c == '\t') {
+          out += c;
+        }
     }
   }
   return out;

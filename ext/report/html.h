@@ -13,7 +13,8 @@
 
 namespace bayon {
 
-// &, <, >, " and ' as entities.
+// &, <, >, " and ' as entities; control characters other than tab and
+// newline, which XML 1.0 (inline SVG) does not allow, are dropped.
 std::string HtmlEscape(const std::string& text);
 
 std::string Base64(const std::string& bytes);

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/report/svg_plot.h"
 
+#include "ext/report/html.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -15,36 +17,6 @@ constexpr double kFontSize = 11;
 constexpr double kCharWidth = 6.2;
 constexpr char kAxisColor[] = "#444444";
 constexpr char kGridColor[] = "#e4e4e4";
-
-std::string EscapeXml(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        // Control characters are not allowed in XML 1.0.
-        if (static_cast<unsigned char>(c) >= 0x20 || c == '\n' || c == '\t') {
-          out += c;
-        }
-    }
-  }
-  return out;
-}
 
 // A coordinate with one decimal (a tenth of a pixel is below what a screen
 // shows), without a trailing ".0".
@@ -74,7 +46,7 @@ class Svg {
         Num(width) + " " + Num(height) +
         "\" role=\"img\" font-family=\"sans-serif\" font-size=\"" +
         Num(kFontSize) + "\">";
-    if (!title.empty()) out_ += "<title>" + EscapeXml(title) + "</title>";
+    if (!title.empty()) out_ += "<title>" + HtmlEscape(title) + "</title>";
   }
 
   void Line(const Eigen::Vector2d& a,
@@ -100,7 +72,7 @@ class Svg {
     if (tooltip.empty()) {
       out_ += "/>";
     } else {
-      out_ += "><title>" + EscapeXml(tooltip) + "</title></rect>";
+      out_ += "><title>" + HtmlEscape(tooltip) + "</title></rect>";
     }
   }
 
@@ -180,7 +152,7 @@ class Svg {
       out_ += " transform=\"rotate(" + Num(rotate_deg) + " " + Num(at.x()) +
               " " + Num(at.y()) + ")\"";
     }
-    out_ += ">" + EscapeXml(text) + "</text>";
+    out_ += ">" + HtmlEscape(text) + "</text>";
   }
 
   std::string Finish() { return out_ + "</svg>"; }
