@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // `bayon compare_colmap` end to end on the temple ring (16 x 640x480, real
-// photographs with Middlebury's calibration as truth): bayon's chain as
-// scripts/bench/chain.sh runs it, then stock COLMAP beside it through the
+// photographs with Middlebury's calibration as truth): the workspace
+// `bayon pipeline` makes of it, then stock COLMAP beside it through the
 // command; the table's figures within the ranges the benchmark measured,
 // the workspace's own database and model untouched, a second run reusing
 // COLMAP's model, and bad input refused before COLMAP runs.
@@ -18,6 +18,7 @@
 #include <iostream>
 #include <stdexcept>
 
+#include "tests/temple_fixture.h"
 #include "tests/testing.h"
 
 namespace fs = std::filesystem;
@@ -36,129 +37,18 @@ std::string TreeDigest(const std::string& path) {
   return digest;
 }
 
-// Runs bayon, throwing on failure (so that a broken fixture is not marked
-// complete), and returns the wall clock seconds.
-double RunOrThrow(const std::vector<std::string>& args) {
-  const auto start = std::chrono::steady_clock::now();
-  const testing::CommandResult result = testing::RunBayon(args);
-  if (result.exit_code != 0) {
-    throw std::runtime_error("bayon " + args[0] + " failed:\n" + result.output);
-  }
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-// dir/truth: the ring's truth; dir/ws: bayon's chain on the ring (the
-// calibrated camera, all pairs matched, free network, no self-calibration)
-// with a pipeline.json as `bayon pipeline` writes it, then compare_colmap
+// dir/ws: a copy of the workspace `bayon pipeline` made of the ring (the
+// calibrated camera, all pairs matched, free network), then compare_colmap
 // run once against the truth, its output in dir/compare.txt and the hashes
 // of the workspace's database and model before it in dir/*.hash.
 std::string TempleFixture() {
   return testing::SharedFixture(
       "compare_colmap_temple", [](const std::string& dir) {
-        const std::string images = testing::DataPath("temple-ring");
         const std::string ws = dir + "/ws";
-        const std::string db = ws + "/database.db";
-        fs::create_directories(ws);
-        RunOrThrow({"import_ground_truth",
-                    "--format",
-                    "middlebury",
-                    "--input_path",
-                    images + "/templeSR_par.txt",
-                    "--output_path",
-                    dir + "/truth"});
-        const Scene truth = ReadModel(dir + "/truth");
-        const std::string threads = "2";
-        const std::vector<std::pair<std::string, std::vector<std::string>>>
-            stages = {
-                {"import",
-                 {"--image_path",
-                  images,
-                  "--database_path",
-                  db,
-                  "--single_camera",
-                  "1",
-                  "--camera_model",
-                  "PINHOLE",
-                  "--camera_params",
-                  testing::CommaSeparated(
-                      truth.cameras.begin()->second.params)}},
-                {"features",
-                 {"--database_path",
-                  db,
-                  "--image_path",
-                  images,
-                  "--num_threads",
-                  threads}},
-                {"match",
-                 {"--database_path",
-                  db,
-                  "--image_path",
-                  images,
-                  "--pairing",
-                  "exhaustive",
-                  "--num_threads",
-                  threads}},
-                {"relative", {"--database_path", db, "--num_threads", threads}},
-                {"disparity",
-                 {"--database_path", db, "--num_threads", threads}},
-                {"tiepoints",
-                 {"--database_path",
-                  db,
-                  "--image_path",
-                  images,
-                  "--num_threads",
-                  threads}},
-                {"strip",
-                 {"--database_path",
-                  db,
-                  "--output_path",
-                  ws + "/sparse/initial",
-                  "--num_threads",
-                  threads}},
-                {"adjust",
-                 {"--database_path",
-                  db,
-                  "--input_path",
-                  ws + "/sparse/initial",
-                  "--output_path",
-                  ws + "/sparse/adjusted",
-                  "--datum",
-                  "free",
-                  "--self_calibration",
-                  "none",
-                  "--num_threads",
-                  threads}}};
-        Json pipeline = {{"workspace_path", ws},
-                         {"image_path", images},
-                         {"config", ""},
-                         {"stages", Json::array()}};
-        double total = 0;
-        for (const auto& [name, options] : stages) {
-          std::vector<std::string> args = {name};
-          args.insert(args.end(), options.begin(), options.end());
-          const double seconds = RunOrThrow(args);
-          std::vector<std::string> command = {"bayon"};
-          command.insert(command.end(), args.begin(), args.end());
-          pipeline["stages"].push_back({{"name", name},
-                                        {"program", "bayon"},
-                                        {"status", "ran"},
-                                        {"seconds", seconds},
-                                        {"command", command}});
-          total += seconds;
-        }
-        // A later stage the comparison leaves out (COLMAP's column is sparse
-        // only).
-        pipeline["stages"].push_back({{"name", "dense"},
-                                      {"program", "bayon"},
-                                      {"status", "ran"},
-                                      {"seconds", 100.0},
-                                      {"command", Json::array()}});
-        pipeline["total_seconds"] = total + 100.0;
-        WriteFileAtomically(ws + "/pipeline.json", pipeline.dump(2) + "\n");
-
-        WriteFileAtomically(dir + "/database.hash",
-                            std::to_string(FileHash(db)) + "\n");
+        testing::CopyTree(testing::TemplePipelineWorkspace(), ws);
+        WriteFileAtomically(
+            dir + "/database.hash",
+            std::to_string(FileHash(ws + "/database.db")) + "\n");
         WriteFileAtomically(dir + "/adjusted.hash",
                             TreeDigest(ws + "/sparse/adjusted"));
         const testing::CommandResult result =
@@ -166,9 +56,9 @@ std::string TempleFixture() {
                                "--workspace_path",
                                ws,
                                "--ground_truth_path",
-                               dir + "/truth",
+                               testing::TempleConfigFixture().truth,
                                "--num_threads",
-                               threads});
+                               "2"});
         WriteFileAtomically(dir + "/compare.txt", result.output);
         if (result.exit_code != 0) {
           throw std::runtime_error("bayon compare_colmap failed:\n" +

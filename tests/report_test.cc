@@ -1,13 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // `bayon report` end to end on the temple ring (16 x 640x480, real
-// photographs with Middlebury's calibration as truth): bayon's whole chain
-// run stage by stage (as scripts/bench/chain.sh, then dense, edit, mesh,
-// texture, render, viewer and evaluate) with a pipeline.json of the real
-// timings, then the report: one self-contained page with every section,
-// well-formed charts, figures that agree with adjustment.json, a page that
-// a real browser (headless chromium) draws, and bad input refused in one
-// line.
+// photographs with Middlebury's calibration as truth): the workspace
+// `bayon pipeline` makes of it (tests/temple_fixture.h), then the report: one
+// self-contained page with every section, well-formed charts, figures that
+// agree with adjustment.json, a page that a real browser (headless chromium)
+// draws, and bad input refused in one line.
 #include "ext/colmap/model_io.h"
 #include "ext/core/file_util.h"
 #include "ext/report/xml_testing.h"
@@ -26,6 +24,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "tests/temple_fixture.h"
 #include "tests/testing.h"
 
 namespace fs = std::filesystem;
@@ -34,176 +33,6 @@ namespace bayon {
 namespace {
 
 using Json = nlohmann::ordered_json;
-
-// Runs bayon, throwing on failure (so that a broken fixture is not marked
-// complete), and returns the wall clock seconds.
-double RunOrThrow(const std::vector<std::string>& args) {
-  const auto start = std::chrono::steady_clock::now();
-  const testing::CommandResult result = testing::RunBayon(args);
-  if (result.exit_code != 0) {
-    throw std::runtime_error("bayon " + args[0] + " failed:\n" + result.output);
-  }
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-// dir/truth: the ring's truth; dir/ws: a workspace as `bayon pipeline`
-// leaves it, made by the stages one by one (the calibrated camera, all
-// pairs matched, free network with the significant additional parameters;
-// fewer tie-point candidates and small renders, for time), with its
-// pipeline.json and `bayon evaluate`'s evaluation.json. About 45 s on 2
-// cores.
-std::string TempleWorkspace() {
-  return testing::SharedFixture("report_temple", [](const std::string& dir) {
-    const std::string images = testing::DataPath("temple-ring");
-    const std::string ws = dir + "/ws";
-    const std::string db = ws + "/database.db";
-    fs::create_directories(ws + "/pipeline");
-    RunOrThrow({"import_ground_truth",
-                "--format",
-                "middlebury",
-                "--input_path",
-                images + "/templeSR_par.txt",
-                "--output_path",
-                dir + "/truth"});
-    const std::string threads = "2";
-    const std::vector<std::pair<std::string, std::vector<std::string>>> stages =
-        {{"import",
-          {"--image_path",
-           images,
-           "--database_path",
-           db,
-           "--single_camera",
-           "1",
-           "--camera_model",
-           "PINHOLE",
-           "--camera_params",
-           testing::CommaSeparated(
-               ReadModel(dir + "/truth").cameras.begin()->second.params)}},
-         {"features",
-          {"--database_path",
-           db,
-           "--image_path",
-           images,
-           "--num_threads",
-           threads}},
-         {"match",
-          {"--database_path",
-           db,
-           "--image_path",
-           images,
-           "--pairing",
-           "exhaustive",
-           "--num_threads",
-           threads}},
-         {"relative", {"--database_path", db, "--num_threads", threads}},
-         {"disparity", {"--database_path", db, "--num_threads", threads}},
-         {"tiepoints",
-          {"--database_path",
-           db,
-           "--image_path",
-           images,
-           "--candidates_per_cell",
-           "2",
-           "--report_path",
-           ws + "/pipeline/tiepoints.json",
-           "--num_threads",
-           threads}},
-         {"strip",
-          {"--database_path",
-           db,
-           "--output_path",
-           ws + "/sparse/initial",
-           "--num_threads",
-           threads}},
-         {"adjust",
-          {"--database_path",
-           db,
-           "--input_path",
-           ws + "/sparse/initial",
-           "--output_path",
-           ws + "/sparse/adjusted",
-           "--datum",
-           "free",
-           "--self_calibration",
-           "significant",
-           "--num_threads",
-           threads}},
-         {"dense",
-          {"--workspace_path",
-           ws,
-           "--image_path",
-           images,
-           "--output_path",
-           ws + "/dense/points.ply",
-           "--num_threads",
-           threads}},
-         {"edit",
-          {"--input_path",
-           ws + "/dense/points.ply",
-           "--output_path",
-           ws + "/dense/points_edited.ply",
-           "--report_path",
-           ws + "/dense/edit.json"}},
-         {"mesh",
-          {"--input_path",
-           ws + "/dense/points_edited.ply",
-           "--output_path",
-           ws + "/mesh/mesh.ply",
-           "--method",
-           "poisson",
-           "--report_path",
-           ws + "/mesh/mesh.json"}},
-         {"texture", {"--workspace_path", ws, "--image_path", images}},
-         {"render",
-          {"--model_path",
-           ws + "/model/model.obj",
-           "--output_path",
-           ws + "/renders",
-           "--num_views",
-           "2",
-           "--width",
-           "480",
-           "--height",
-           "360",
-           "--supersampling",
-           "2",
-           "--stereo",
-           "anaglyph"}},
-         {"viewer",
-          {"--model_path",
-           ws + "/model/model.glb",
-           "--output_path",
-           ws + "/viewer"}}};
-    Json pipeline = {{"workspace_path", ws},
-                     {"image_path", images},
-                     {"config", ""},
-                     {"stages", Json::array()}};
-    double total = 0;
-    for (const auto& [name, options] : stages) {
-      std::vector<std::string> args = {name};
-      args.insert(args.end(), options.begin(), options.end());
-      const double seconds = RunOrThrow(args);
-      std::vector<std::string> command = {"bayon"};
-      command.insert(command.end(), args.begin(), args.end());
-      pipeline["stages"].push_back({{"name", name},
-                                    {"program", "bayon"},
-                                    {"status", "ran"},
-                                    {"seconds", seconds},
-                                    {"command", command}});
-      total += seconds;
-    }
-    pipeline["total_seconds"] = total;
-    WriteFileAtomically(ws + "/pipeline.json", pipeline.dump(2) + "\n");
-    RunOrThrow({"evaluate",
-                "--input_path",
-                ws + "/sparse/adjusted",
-                "--ground_truth_path",
-                dir + "/truth",
-                "--output_path",
-                ws + "/evaluation.json"});
-  });
-}
 
 // Every <svg>...</svg> element of a page.
 std::vector<std::string> SvgElements(const std::string& html) {
@@ -259,7 +88,7 @@ std::string FindChromium() {
 
 TEST(Report, TempleRingPageIsCompleteAndSelfContained) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string ws = TempleWorkspace() + "/ws";
+  const std::string ws = testing::TemplePipelineWorkspace();
   const std::string dir = testing::TempDir("report_test/page");
   const std::string page = dir + "/report.html";
   const testing::CommandResult result = testing::RunBayon(
@@ -385,7 +214,7 @@ TEST(Report, ChromiumDrawsThePage) {
     GTEST_SKIP() << "chromium not installed (scripts/setup.sh installs it; "
                     "or set BAYON_CHROMIUM)";
   }
-  const std::string ws = TempleWorkspace() + "/ws";
+  const std::string ws = testing::TemplePipelineWorkspace();
   const std::string dir = testing::TempDir("report_test/chromium");
   const std::string page = dir + "/report.html";
   ASSERT_EQ(testing::RunBayon(
@@ -437,7 +266,8 @@ TEST(Report, WritesIntoTheWorkspaceAndRefusesToOverwrite) {
   const std::string dir = testing::TempDir("report_test/default");
   const std::string ws = dir + "/ws";
   // The parts the page reads (not the photographs or the database's size).
-  testing::CopyTree(TempleWorkspace() + "/ws", ws);
+  testing::CopyTree(testing::TemplePipelineWorkspace(), ws);
+  fs::remove(ws + "/report.html");  // the pipeline's own
   auto result = testing::RunBayon({"report", "--workspace_path", ws});
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_TRUE(fs::is_regular_file(ws + "/report.html"));

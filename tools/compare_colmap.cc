@@ -16,6 +16,7 @@
 // than its minimum model size) the comparison is still written, with
 // COLMAP's column at 0 registered and no figures (null) beside it, and the
 // command exits 1.
+#include "ext/colmap/calibration_json.h"
 #include "ext/colmap/colmap_cli.h"
 #include "ext/colmap/model_io.h"
 #include "ext/core/camera_models.h"
@@ -758,7 +759,12 @@ int RunCompareColmap(int argc, char** argv) {
                     ": no bayon model to compare (run bayon pipeline first, "
                     "or give --bayon_model_path)");
   }
-  const Scene bayon_model = ReadModel(options.bayon_model_path);
+  // With its full calibration (calibration.json): the FULL_OPENCV cameras
+  // of the COLMAP files cannot express every Brown/Beyer parameter (affinity
+  // and shear), which would add their fit residual to bayon's errors.
+  const std::string database = (fs::path(workspace) / "database.db").string();
+  const Scene bayon_model = ReadOrientedModel(
+      options.bayon_model_path, fs::exists(database) ? database : "");
   if (options.image_path.empty()) {
     options.image_path = DefaultImagePath(workspace, pipeline);
   }
