@@ -929,17 +929,24 @@ int RunPipeline(int argc, char** argv) {
           << (run.status == "ran" ? FormatSeconds(run.seconds) : "-") << "\n";
   }
   std::cout << table.str() << std::endl;
-  command.PrintSummary(StrCat(num_ran,
-                              " stages ran, ",
-                              num_skipped,
-                              " up to date, in ",
-                              FormatSeconds(total),
-                              "; report: ",
-                              In(c.workspace, "report.html"),
-                              ", model: ",
-                              In(c.workspace, "model/model.glb"),
-                              ", viewer: ",
-                              In(c.workspace, "viewer/index.html")));
+  // Where the products are, those this run (or an earlier one) made.
+  std::string products;
+  for (const auto& [label, path] :
+       std::vector<std::pair<std::string, std::string>>{
+           {"report", "report.html"},
+           {"model", "model/model.glb"},
+           {"viewer", "viewer/index.html"}}) {
+    if (fs::exists(In(c.workspace, path))) {
+      products += StrCat("; ", label, ": ", In(c.workspace, path));
+    }
+  }
+  command.PrintSummary(
+      StrCat(num_ran,
+             " stages ran, ",
+             num_skipped,
+             " up to date, in ",
+             FormatSeconds(total),
+             products.empty() ? StrCat(" -> ", c.workspace) : products));
   return 0;
 }
 
