@@ -320,16 +320,16 @@ int64_t Database::UserVersion() {
   return connection_->QueryInt64("PRAGMA user_version");
 }
 
-SqliteStatement& Database::Statement(const std::string& sql) {
+Database::StatementLease Database::Statement(const std::string& sql) {
   for (auto& [text, statement] : statements_) {
     if (text == sql) {
       statement->Reset();
-      return *statement;
+      return StatementLease(statement.get());
     }
   }
   statements_.emplace_back(
       sql, std::make_unique<SqliteStatement>(connection_.get(), sql));
-  return *statements_.back().second;
+  return StatementLease(statements_.back().second.get());
 }
 
 // ---------------------------------------------------------------- counts
@@ -417,15 +417,18 @@ Camera CameraFromRow(const SqliteStatement& statement, const std::string& db) {
 }  // namespace
 
 bool Database::ExistsCamera(camera_t camera_id) {
-  auto& statement = Statement("SELECT 1 FROM cameras WHERE camera_id = ?");
+  const StatementLease lease =
+      Statement("SELECT 1 FROM cameras WHERE camera_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(camera_id));
   return statement.Step();
 }
 
 Camera Database::ReadCamera(camera_t camera_id) {
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "SELECT camera_id, model, width, height, params, prior_focal_length "
       "FROM cameras WHERE camera_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(camera_id));
   if (!statement.Step()) {
     ThrowInputError(path(), ": no camera with id ", camera_id);
@@ -435,9 +438,10 @@ Camera Database::ReadCamera(camera_t camera_id) {
 
 std::vector<Camera> Database::ReadAllCameras() {
   std::vector<Camera> cameras;
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "SELECT camera_id, model, width, height, params, prior_focal_length "
       "FROM cameras ORDER BY camera_id");
+  SqliteStatement& statement = *lease;
   while (statement.Step()) cameras.push_back(CameraFromRow(statement, path()));
   return cameras;
 }
@@ -451,9 +455,10 @@ camera_t Database::WriteCamera(const Camera& camera, bool use_camera_id) {
                     " cannot be stored in COLMAP's cameras table");
   }
   camera.Check();
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "INSERT INTO cameras(camera_id, model, width, height, params, "
       "prior_focal_length) VALUES(?, ?, ?, ?, ?, ?)");
+  SqliteStatement& statement = *lease;
   if (use_camera_id) {
     statement.Bind(1, static_cast<int64_t>(camera.camera_id));
   } else {
@@ -472,9 +477,10 @@ camera_t Database::WriteCamera(const Camera& camera, bool use_camera_id) {
 void Database::UpdateCamera(const Camera& camera) {
   CheckWritable("cameras");
   camera.Check();
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "UPDATE cameras SET model = ?, width = ?, height = ?, params = ?, "
       "prior_focal_length = ? WHERE camera_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(camera.model_id));
   statement.Bind(2, static_cast<int64_t>(camera.width));
   statement.Bind(3, static_cast<int64_t>(camera.height));
@@ -512,23 +518,27 @@ std::string ImageSelect(bool priors) {
 }  // namespace
 
 bool Database::ExistsImage(image_t image_id) {
-  auto& statement = Statement("SELECT 1 FROM images WHERE image_id = ?");
+  const StatementLease lease =
+      Statement("SELECT 1 FROM images WHERE image_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   return statement.Step();
 }
 
 std::optional<DatabaseImage> Database::ReadImageWithName(
     const std::string& name) {
-  auto& statement =
+  const StatementLease lease =
       Statement(ImageSelect(images_have_priors_) + " WHERE name = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, name);
   if (!statement.Step()) return std::nullopt;
   return ImageFromRow(statement, images_have_priors_);
 }
 
 DatabaseImage Database::ReadImage(image_t image_id) {
-  auto& statement =
+  const StatementLease lease =
       Statement(ImageSelect(images_have_priors_) + " WHERE image_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   if (!statement.Step()) {
     ThrowInputError(path(), ": no image with id ", image_id);
@@ -538,8 +548,9 @@ DatabaseImage Database::ReadImage(image_t image_id) {
 
 std::vector<DatabaseImage> Database::ReadAllImages() {
   std::vector<DatabaseImage> images;
-  auto& statement =
+  const StatementLease lease =
       Statement(ImageSelect(images_have_priors_) + " ORDER BY image_id");
+  SqliteStatement& statement = *lease;
   while (statement.Step()) {
     images.push_back(ImageFromRow(statement, images_have_priors_));
   }
@@ -549,12 +560,13 @@ std::vector<DatabaseImage> Database::ReadAllImages() {
 image_t Database::WriteImage(const DatabaseImage& image, bool use_image_id) {
   CheckWritable("images");
   if (image.name.empty()) ThrowInputError(path(), ": an image needs a name");
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       images_have_priors_
           ? "INSERT INTO images(image_id, name, camera_id, prior_qw, prior_qx, "
             "prior_qy, prior_qz, prior_tx, prior_ty, prior_tz) "
             "VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"
           : "INSERT INTO images(image_id, name, camera_id) VALUES(?, ?, ?)");
+  SqliteStatement& statement = *lease;
   if (use_image_id) {
     statement.Bind(1, static_cast<int64_t>(image.image_id));
   } else {
@@ -572,12 +584,13 @@ image_t Database::WriteImage(const DatabaseImage& image, bool use_image_id) {
 
 void Database::UpdateImage(const DatabaseImage& image) {
   CheckWritable("images");
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       images_have_priors_
           ? "UPDATE images SET name = ?, camera_id = ?, prior_qw = ?, "
             "prior_qx = ?, prior_qy = ?, prior_qz = ?, prior_tx = ?, "
             "prior_ty = ?, prior_tz = ? WHERE image_id = ?"
           : "UPDATE images SET name = ?, camera_id = ? WHERE image_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, image.name);
   statement.Bind(2, static_cast<int64_t>(image.camera_id));
   int idx = 3;
@@ -592,20 +605,25 @@ void Database::UpdateImage(const DatabaseImage& image) {
 // ---------------------------------------------------- keypoints, descriptors
 
 bool Database::ExistsKeypoints(image_t image_id) {
-  auto& statement = Statement("SELECT 1 FROM keypoints WHERE image_id = ?");
+  const StatementLease lease =
+      Statement("SELECT 1 FROM keypoints WHERE image_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   return statement.Step();
 }
 
 bool Database::ExistsDescriptors(image_t image_id) {
-  auto& statement = Statement("SELECT 1 FROM descriptors WHERE image_id = ?");
+  const StatementLease lease =
+      Statement("SELECT 1 FROM descriptors WHERE image_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   return statement.Step();
 }
 
 FeatureKeypoints Database::ReadKeypoints(image_t image_id) {
-  auto& statement =
+  const StatementLease lease =
       Statement("SELECT rows, cols, data FROM keypoints WHERE image_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   if (!statement.Step()) return FeatureKeypoints(0, 2);
   const std::string what = StrCat(path(), ": keypoints of image ", image_id);
@@ -622,8 +640,9 @@ FeatureKeypoints Database::ReadKeypoints(image_t image_id) {
 }
 
 FeatureDescriptors Database::ReadDescriptors(image_t image_id) {
-  auto& statement =
+  const StatementLease lease =
       Statement("SELECT rows, cols, data FROM descriptors WHERE image_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   if (!statement.Step()) return FeatureDescriptors(0, 128);
   return ReadMatrixBlob<FeatureDescriptors>(
@@ -633,9 +652,10 @@ FeatureDescriptors Database::ReadDescriptors(image_t image_id) {
 void Database::WriteKeypoints(image_t image_id,
                               const FeatureKeypoints& keypoints) {
   CheckWritable("keypoints");
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "INSERT OR REPLACE INTO keypoints(image_id, rows, cols, data) "
       "VALUES(?, ?, ?, ?)");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   BindMatrixBlob(statement, 2, keypoints);
   statement.Execute();
@@ -644,9 +664,10 @@ void Database::WriteKeypoints(image_t image_id,
 void Database::WriteDescriptors(image_t image_id,
                                 const FeatureDescriptors& descriptors) {
   CheckWritable("descriptors");
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "INSERT OR REPLACE INTO descriptors(image_id, rows, cols, data) "
       "VALUES(?, ?, ?, ?)");
+  SqliteStatement& statement = *lease;
   statement.Bind(1, static_cast<int64_t>(image_id));
   BindMatrixBlob(statement, 2, descriptors);
   statement.Execute();
@@ -666,15 +687,18 @@ FeatureMatches SwapColumns(const FeatureMatches& matches) {
 }  // namespace
 
 bool Database::ExistsMatches(image_t image_id1, image_t image_id2) {
-  auto& statement = Statement("SELECT 1 FROM matches WHERE pair_id = ?");
+  const StatementLease lease =
+      Statement("SELECT 1 FROM matches WHERE pair_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   return statement.Step();
 }
 
 FeatureMatches Database::ReadMatches(image_t image_id1, image_t image_id2) {
-  auto& statement =
+  const StatementLease lease =
       Statement("SELECT rows, cols, data FROM matches WHERE pair_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   if (!statement.Step()) return FeatureMatches(0, 2);
@@ -689,8 +713,9 @@ FeatureMatches Database::ReadMatches(image_t image_id1, image_t image_id2) {
 
 std::vector<std::pair<pair_t, FeatureMatches>> Database::ReadAllMatches() {
   std::vector<std::pair<pair_t, FeatureMatches>> all;
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "SELECT pair_id, rows, cols, data FROM matches ORDER BY pair_id");
+  SqliteStatement& statement = *lease;
   while (statement.Step()) {
     const pair_t pair_id = static_cast<pair_t>(statement.ColumnInt64(0));
     all.emplace_back(
@@ -703,8 +728,9 @@ std::vector<std::pair<pair_t, FeatureMatches>> Database::ReadAllMatches() {
 
 std::vector<pair_t> Database::ReadMatchedPairIds() {
   std::vector<pair_t> pair_ids;
-  auto& statement =
+  const StatementLease lease =
       Statement("SELECT pair_id FROM matches WHERE rows > 0 ORDER BY pair_id");
+  SqliteStatement& statement = *lease;
   while (statement.Step()) pair_ids.push_back(statement.ColumnInt64(0));
   return pair_ids;
 }
@@ -713,9 +739,10 @@ void Database::WriteMatches(image_t image_id1,
                             image_t image_id2,
                             const FeatureMatches& matches) {
   CheckWritable("matches");
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "INSERT OR REPLACE INTO matches(pair_id, rows, cols, data) "
       "VALUES(?, ?, ?, ?)");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   if (SwapImagePair(image_id1, image_id2)) {
@@ -728,7 +755,9 @@ void Database::WriteMatches(image_t image_id1,
 
 void Database::DeleteMatches(image_t image_id1, image_t image_id2) {
   CheckWritable("matches");
-  auto& statement = Statement("DELETE FROM matches WHERE pair_id = ?");
+  const StatementLease lease =
+      Statement("DELETE FROM matches WHERE pair_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   statement.Execute();
@@ -760,8 +789,9 @@ TwoViewGeometry InvertTwoViewGeometry(const TwoViewGeometry& geometry) {
 }
 
 bool Database::ExistsTwoViewGeometry(image_t image_id1, image_t image_id2) {
-  auto& statement =
+  const StatementLease lease =
       Statement("SELECT 1 FROM two_view_geometries WHERE pair_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   return statement.Step();
@@ -791,8 +821,9 @@ TwoViewGeometry GeometryFromRow(const SqliteStatement& statement,
 
 TwoViewGeometry Database::ReadTwoViewGeometry(image_t image_id1,
                                               image_t image_id2) {
-  auto& statement =
+  const StatementLease lease =
       Statement(std::string(kSelectGeometry) + " WHERE pair_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   if (!statement.Step()) return TwoViewGeometry();
@@ -810,8 +841,9 @@ TwoViewGeometry Database::ReadTwoViewGeometry(image_t image_id1,
 std::vector<std::pair<pair_t, TwoViewGeometry>>
 Database::ReadAllTwoViewGeometries() {
   std::vector<std::pair<pair_t, TwoViewGeometry>> all;
-  auto& statement =
+  const StatementLease lease =
       Statement(std::string(kSelectGeometry) + " ORDER BY pair_id");
+  SqliteStatement& statement = *lease;
   while (statement.Step()) {
     const pair_t pair_id = static_cast<pair_t>(statement.ColumnInt64(0));
     all.emplace_back(
@@ -829,9 +861,10 @@ void Database::WriteTwoViewGeometry(image_t image_id1,
   const TwoViewGeometry stored = SwapImagePair(image_id1, image_id2)
                                      ? InvertTwoViewGeometry(geometry)
                                      : geometry;
-  auto& statement = Statement(
+  const StatementLease lease = Statement(
       "INSERT OR REPLACE INTO two_view_geometries(pair_id, rows, cols, data, "
       "config, F, E, H, qvec, tvec) VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   BindMatrixBlob(statement, 2, stored.inlier_matches);
@@ -846,8 +879,9 @@ void Database::WriteTwoViewGeometry(image_t image_id1,
 
 void Database::DeleteTwoViewGeometry(image_t image_id1, image_t image_id2) {
   CheckWritable("two_view_geometries");
-  auto& statement =
+  const StatementLease lease =
       Statement("DELETE FROM two_view_geometries WHERE pair_id = ?");
+  SqliteStatement& statement = *lease;
   statement.Bind(
       1, static_cast<int64_t>(PairIdFromImageIds(image_id1, image_id2)));
   statement.Execute();

@@ -184,7 +184,24 @@ class Database {
  private:
   void CreateColmapTables();
   void DetectSchema();
-  SqliteStatement& Statement(const std::string& sql);
+  // One use of a cached statement: reset when the lease ends. A SELECT left
+  // on a row keeps a read lock on the file; another process's COMMIT then
+  // waits for it, and this connection's next BEGIN IMMEDIATE fails at once
+  // with "database is locked" (SQLite does not wait where waiting could
+  // deadlock): `bayon match` beside `bayon features` did so.
+  class StatementLease {
+   public:
+    explicit StatementLease(SqliteStatement* statement)
+        : statement_(statement) {}
+    ~StatementLease() { statement_->Reset(); }
+    StatementLease(const StatementLease&) = delete;
+    StatementLease& operator=(const StatementLease&) = delete;
+    SqliteStatement& operator*() const { return *statement_; }
+
+   private:
+    SqliteStatement* statement_;
+  };
+  StatementLease Statement(const std::string& sql);
 
   std::unique_ptr<SqliteConnection> connection_;
   DatabaseSchema schema_ = DatabaseSchema::kEmpty;

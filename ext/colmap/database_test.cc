@@ -10,6 +10,9 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <thread>
+
 #include "tests/testing.h"
 
 namespace bayon {
@@ -80,6 +83,43 @@ TEST(Database, WritesAndReadsEveryTable) {
   EXPECT_LT((*stored.F - F.transpose()).norm(), 1e-12);
   EXPECT_EQ(db.NumInlierMatches(), 2);
   EXPECT_EQ(db.NumKeypoints(), 5);
+}
+
+// A single-row read must not keep its read lock: with it, this connection's
+// next BEGIN IMMEDIATE failed at once ("database is locked") while another
+// connection was writing, instead of waiting for it (`bayon match` beside
+// `bayon features` on one database).
+TEST(Database, ReadsReleaseTheirLockSoTransactionsWaitForOtherWriters) {
+  const std::string dir = testing::TempDir("database_concurrent");
+  const std::string path = dir + "/db.db";
+  camera_t camera_id = kInvalidCameraId;
+  {
+    Database db(path, Database::Mode::kCreate);
+    camera_id = db.WriteCamera(TestCamera());
+    db.WriteImage(DatabaseImage{kInvalidImageId, "a.png", camera_id, {}, {}});
+  }
+  Database reader(path, Database::Mode::kReadWrite);
+  Database writer(path, Database::Mode::kReadWrite);
+  auto writing = writer.BeginTransaction();
+  writer.WriteImage(DatabaseImage{kInvalidImageId, "b.png", camera_id, {}, {}});
+  ASSERT_TRUE(reader.ReadImageWithName("a.png"));
+  std::thread commit([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    writing.Commit();
+  });
+  std::string error;
+  try {
+    auto transaction = reader.BeginTransaction();  // waits for the commit
+    reader.WriteImage(
+        DatabaseImage{kInvalidImageId, "c.png", camera_id, {}, {}});
+    transaction.Commit();
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  commit.join();
+  EXPECT_EQ(error, "");
+  EXPECT_TRUE(reader.ReadImageWithName("b.png"));
+  EXPECT_TRUE(reader.ReadImageWithName("c.png"));
 }
 
 TEST(Database, RefusesWhatIsNotAColmapDatabase) {
