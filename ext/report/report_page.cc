@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/report/report_page.h"
 
+#include "ext/core/statistics.h"
 #include "ext/report/html.h"
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace bayon {
 namespace report {
@@ -96,10 +98,7 @@ double Median(std::vector<double> values) {
                               values.end(),
                               [](double v) { return !std::isfinite(v); }),
                values.end());
-  if (values.empty()) return kNaN;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
+  return values.empty() ? kNaN : bayon::Median(std::move(values));
 }
 
 std::string Count(int64_t value) {

@@ -31,6 +31,12 @@ struct PaperPrecision {
   static constexpr double kSx = 5.8, kSy = 3.7, kSz = 8.8;  // mm
 };
 
+// Every how many of `count` items to show so that at most `max_shown` are
+// (at least 1).
+size_t Stride(size_t count, int max_shown) {
+  return std::max<size_t>(1, (count + max_shown - 1) / std::max(max_shown, 1));
+}
+
 // ---------------------------------------------------------------------------
 // 1. The pipeline run.
 
@@ -137,7 +143,7 @@ std::vector<CameraStation> Stations(const Scene& model) {
     const Eigen::Matrix3d world_from_cam =
         image->cam_from_world.rotation.toRotationMatrix().transpose();
     stations.push_back({image->name,
-                        -world_from_cam * image->cam_from_world.translation,
+                        image->cam_from_world.Center(),
                         world_from_cam.col(2),
                         -world_from_cam.col(1)});
   }
@@ -209,10 +215,7 @@ std::string StationView(const Workspace& ws,
   points.radius_px = 1.1;
   points.opacity = 0.6;
   const size_t num_points = ws.model.points3D.size();
-  const size_t every =
-      std::max<size_t>(1,
-                       (num_points + options.max_plot_points - 1) /
-                           std::max(options.max_plot_points, 1));
+  const size_t every = Stride(num_points, options.max_plot_points);
   size_t i = 0;
   for (const auto& [point3D_id, point] : ws.model.points3D) {
     if (i++ % every == 0) {
@@ -478,19 +481,14 @@ Section TiePointSection(const Workspace& ws, Page* page) {
 
   // Small multiples: where in each frame the points lie.
   const WorkspaceReportOptions& options = page->options();
-  const size_t every_image = std::max<size_t>(
-      1,
-      (ties.size() + options.max_frames - 1) / std::max(options.max_frames, 1));
+  const size_t every_image = Stride(ties.size(), options.max_frames);
   std::string frames;
   for (size_t i = 0; i < ties.size(); i += every_image) {
     const ImageTies& t = ties[i];
     const Camera& camera = ws.model.cameras.at(t.image->camera_id);
     const Eigen::Vector2d size(camera.width, camera.height);
     const size_t total = t.track_xy.size() + t.tie_xy.size();
-    const size_t every =
-        std::max<size_t>(1,
-                         (total + options.max_frame_points - 1) /
-                             std::max(options.max_frame_points, 1));
+    const size_t every = Stride(total, options.max_frame_points);
     std::vector<PointSeries> series(2);
     series[0].points = Thin(t.track_xy, every);
     series[0].color = kTrackColor;

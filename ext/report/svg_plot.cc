@@ -188,6 +188,28 @@ double HeaderHeight(const ChartOptions& options, double left, double right) {
   return NoteBelowTitle(options, left, right) ? 38 : 26;
 }
 
+// `chart` with "<num_left_out><what>" added to its note where any were left
+// out of the plot.
+ChartOptions WithLeftOutNote(const ChartOptions& chart,
+                             size_t num_left_out,
+                             const std::string& what) {
+  ChartOptions framed = chart;
+  if (num_left_out > 0) {
+    framed.note +=
+        (framed.note.empty() ? "" : "; ") + std::to_string(num_left_out) + what;
+  }
+  return framed;
+}
+
+// The plot area of a chart `height` pixels high with a y axis on the left
+// and an x axis below.
+PlotArea XyPlotArea(const ChartOptions& chart, double height) {
+  return {52,
+          HeaderHeight(chart, 52, chart.width_px - 12.0),
+          chart.width_px - 12.0,
+          height - 38};
+}
+
 void DrawTitleAndNote(const ChartOptions& options,
                       const PlotArea& area,
                       Svg* svg) {
@@ -399,15 +421,9 @@ std::string SvgHistogram(const std::vector<double>& values,
   double max_count = *std::max_element(counts.begin(), counts.end());
   if (options.show_normal) max_count = std::max(max_count, density(mean));
 
-  ChartOptions framed = chart;
-  if (num_outside > 0) {
-    framed.note += (framed.note.empty() ? "" : "; ") +
-                   std::to_string(num_outside) + " outside the range";
-  }
-  const PlotArea area{52,
-                      HeaderHeight(framed, 52, chart.width_px - 12.0),
-                      chart.width_px - 12.0,
-                      chart.height_px - 38.0};
+  const ChartOptions framed =
+      WithLeftOutNote(chart, num_outside, " outside the range");
+  const PlotArea area = XyPlotArea(framed, chart.height_px);
   Svg svg(chart.width_px, chart.height_px, chart.title);
   DrawTitleAndNote(framed, area, &svg);
   const std::vector<double> y_ticks = NiceTicks(0, std::max(max_count, 1.0), 5);
@@ -669,15 +685,8 @@ std::string SvgStationView(const PointSeries& points,
                            2 * pad_y + 64,
                        200.0,
                        static_cast<double>(chart.width_px));
-  ChartOptions framed = chart;
-  if (num_left_out > 0) {
-    framed.note += (framed.note.empty() ? "" : "; ") +
-                   std::to_string(num_left_out) + " outside";
-  }
-  const PlotArea area{52,
-                      HeaderHeight(framed, 52, chart.width_px - 12.0),
-                      chart.width_px - 12.0,
-                      height - 38};
+  const ChartOptions framed = WithLeftOutNote(chart, num_left_out, " outside");
+  const PlotArea area = XyPlotArea(framed, height);
   const double scale =
       std::min((area.width() - 2 * pad_x) / std::max(hi.x() - lo.x(), 1e-12),
                (area.height() - 2 * pad_y) / std::max(hi.y() - lo.y(), 1e-12));
