@@ -295,31 +295,8 @@ ColmapResult RunStage(const ColmapCall& call, const fs::path& colmap_dir) {
   return result;
 }
 
-// The mapper's model with the most registered images (the first by name on
-// a tie), relative to W/colmap; empty when there is none.
-std::string LargestModel(const fs::path& colmap_dir) {
-  std::vector<fs::path> folders;
-  for (const auto& entry : fs::directory_iterator(colmap_dir / "sparse")) {
-    if (entry.is_directory() && HasModelFiles(entry.path())) {
-      folders.push_back(entry.path());
-    }
-  }
-  std::sort(folders.begin(), folders.end());
-  std::string best;
-  size_t best_count = 0;
-  for (const fs::path& folder : folders) {
-    const size_t count = ReadModel(folder.string()).images.size();
-    if (count > best_count) {
-      best = fs::relative(folder, colmap_dir).string();
-      best_count = count;
-    }
-  }
-  return best;
-}
-
-Json OptionsJson(const CompareColmapOptions& options,
-                 const std::string& image_path) {
-  return {{"image_path", image_path},
+Json OptionsJson(const CompareColmapOptions& options) {
+  return {{"image_path", options.image_path},
           {"matching", options.matching},
           {"num_neighbors", options.num_neighbors},
           {"camera_model", options.camera_model},
@@ -338,8 +315,8 @@ Json ResultOptions(Json options) {
 }
 
 ColmapRun RunColmapPipeline(const CompareColmapOptions& options,
-                            const std::string& image_path,
                             const fs::path& colmap_dir) {
+  const std::string& image_path = options.image_path;
   ClearColmapFolder(colmap_dir);
   fs::create_directories(colmap_dir / "sparse");
   const std::string database = (colmap_dir / "database.db").string();
@@ -372,7 +349,7 @@ ColmapRun RunColmapPipeline(const CompareColmapOptions& options,
 
   ColmapRun run;
   run.record["colmap_version"] = ColmapVersion();
-  run.record["options"] = OptionsJson(options, image_path);
+  run.record["options"] = OptionsJson(options);
   run.record["stages"] = Json::array();
   run.record["stage_seconds"] = Json::object();
   double total = 0;
@@ -399,7 +376,11 @@ ColmapRun RunColmapPipeline(const CompareColmapOptions& options,
     total += result.seconds;
   }
   run.record["total_seconds"] = total;
-  run.model_path = LargestModel(colmap_dir);
+  // Relative to W/colmap, as colmap.json records it.
+  const std::string largest = LargestModel((colmap_dir / "sparse").string());
+  if (!largest.empty()) {
+    run.model_path = fs::relative(largest, colmap_dir).string();
+  }
   run.record["model_path"] =
       run.model_path.empty() ? Json(nullptr) : Json(run.model_path);
   if (run.model_path.empty() && run.mapper_message.empty()) {
@@ -412,7 +393,6 @@ ColmapRun RunColmapPipeline(const CompareColmapOptions& options,
 }
 
 ColmapRun RunOrReuseColmap(const CompareColmapOptions& options,
-                           const std::string& image_path,
                            const fs::path& colmap_dir) {
   if (!options.overwrite) {
     if (std::optional<Json> record = CompleteColmapRecord(colmap_dir)) {
@@ -420,7 +400,7 @@ ColmapRun RunOrReuseColmap(const CompareColmapOptions& options,
       run.reused = true;
       run.record = *record;
       run.model_path = record->at("model_path").get<std::string>();
-      const Json wanted = OptionsJson(options, image_path);
+      const Json wanted = OptionsJson(options);
       if (ResultOptions(record->value("options", Json::object())) !=
           ResultOptions(wanted)) {
         LOG(WARNING) << "the COLMAP run in " << colmap_dir.string()
@@ -435,7 +415,7 @@ ColmapRun RunOrReuseColmap(const CompareColmapOptions& options,
                 << " holds no finished COLMAP run; running COLMAP";
     }
   }
-  return RunColmapPipeline(options, image_path, colmap_dir);
+  return RunColmapPipeline(options, colmap_dir);
 }
 
 // ---------------------------------------------------------------------------
@@ -762,7 +742,7 @@ int RunCompareColmap(int argc, char** argv) {
   // With its full calibration (calibration.json): the FULL_OPENCV cameras
   // of the COLMAP files cannot express every Brown/Beyer parameter (affinity
   // and shear), which would add their fit residual to bayon's errors.
-  const std::string database = (fs::path(workspace) / "database.db").string();
+  const std::string database = (workspace / "database.db").string();
   const Scene bayon_model = ReadOrientedModel(
       options.bayon_model_path, fs::exists(database) ? database : "");
   if (options.image_path.empty()) {
@@ -786,8 +766,7 @@ int RunCompareColmap(int argc, char** argv) {
   command.StartLog(WorkspaceLogPath(options.workspace_path, "compare_colmap"));
 
   const fs::path colmap_dir = workspace / "colmap";
-  const ColmapRun run =
-      RunOrReuseColmap(options, options.image_path, colmap_dir);
+  const ColmapRun run = RunOrReuseColmap(options, colmap_dir);
   if (run.reused) {
     std::printf(
         "COLMAP: reusing the finished run in %s (colmap.json; --overwrite 1 "
@@ -802,7 +781,7 @@ int RunCompareColmap(int argc, char** argv) {
   const std::set<std::string> folder_images(image_names.begin(),
                                             image_names.end());
   Json c;
-  c["workspace_path"] = fs::absolute(workspace).string();
+  c["workspace_path"] = workspace.string();
   c["image_path"] = options.image_path;
   c["num_images"] = image_names.size();
   c["colmap_version"] = run.record.value("colmap_version", "");

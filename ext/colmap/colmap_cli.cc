@@ -6,13 +6,16 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -170,6 +173,32 @@ std::string ColmapVersion(const ColmapRunOptions& options) {
 void CopyDatabaseForColmap(const std::string& database_path,
                            const std::string& copy_path) {
   CopySqliteDatabase(database_path, copy_path);
+}
+
+std::string LargestModel(const std::string& mapper_output) {
+  std::vector<fs::path> folders;
+  for (const auto& entry : fs::directory_iterator(mapper_output)) {
+    const fs::path& folder = entry.path();
+    if (entry.is_directory() && fs::is_regular_file(folder / "cameras.bin") &&
+        fs::is_regular_file(folder / "images.bin") &&
+        fs::is_regular_file(folder / "points3D.bin")) {
+      folders.push_back(folder);
+    }
+  }
+  std::sort(folders.begin(), folders.end());
+  std::string best;
+  uint64_t best_count = 0;
+  for (const fs::path& folder : folders) {
+    // images.bin begins with the number of registered images (uint64).
+    uint64_t count = 0;
+    std::ifstream((folder / "images.bin").string(), std::ios::binary)
+        .read(reinterpret_cast<char*>(&count), sizeof(count));
+    if (count > best_count) {
+      best = folder.string();
+      best_count = count;
+    }
+  }
+  return best;
 }
 
 }  // namespace bayon

@@ -51,4 +51,11 @@ std::string ColmapVersion(const ColmapRunOptions& options = {});
 void CopyDatabaseForColmap(const std::string& database_path,
                            const std::string& copy_path);
 
+// The model of `colmap mapper --output_path mapper_output` with the most
+// registered images (COLMAP numbers its models 0, 1, ...; the first by name
+// on a tie), as a path; empty when no subfolder holds a binary model
+// (cameras.bin, images.bin, points3D.bin). Reads only the count at the head
+// of each images.bin.
+std::string LargestModel(const std::string& mapper_output);
+
 }  // namespace bayon

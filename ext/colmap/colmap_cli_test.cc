@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 
 #include "tests/testing.h"
 
@@ -63,6 +65,28 @@ TEST(ColmapCli, CopyKeepsTheOriginalUntouched) {
             0);
   EXPECT_EQ(Database(dir + "/db.db", Database::Mode::kReadOnly).NumCameras(),
             1);
+}
+
+// The mapper's model with the most registered images, read from the count
+// at the head of images.bin; folders without a whole binary model ignored.
+TEST(ColmapCli, LargestModelCountsRegisteredImages) {
+  const std::string dir = testing::TempDir("colmap_largest_model");
+  auto write_model =
+      [&](const std::string& name, uint64_t num_images, bool complete) {
+        const std::string folder = dir + "/" + name;
+        std::filesystem::create_directories(folder);
+        std::ofstream images(folder + "/images.bin", std::ios::binary);
+        images.write(reinterpret_cast<const char*>(&num_images),
+                     sizeof(num_images));
+        std::ofstream(folder + "/cameras.bin");
+        if (complete) std::ofstream(folder + "/points3D.bin");
+      };
+  EXPECT_EQ(LargestModel(dir), "");
+  write_model("0", 3, true);
+  write_model("1", 5, true);
+  write_model("2", 9, false);
+  write_model("3", 5, true);
+  EXPECT_EQ(LargestModel(dir), dir + "/1");
 }
 
 }  // namespace
