@@ -43,19 +43,8 @@ std::map<std::string, std::string> Statuses(const std::string& workspace) {
 
 std::vector<std::string> PipelineArgs(const std::string& ws,
                                       const testing::TempleSetup& temple) {
-  return {"pipeline",
-          "--workspace_path",
-          ws,
-          "--image_path",
-          temple.images,
-          "--config",
-          std::string(BAYON_SOURCE_DIR) + "/configs/ring.ini",
-          "--config",
-          temple.config,
-          "--config",
-          fs::path(ws).parent_path().string() + "/cylinder.ini",
-          "--num_threads",
-          "2"};
+  return testing::TemplePipelineCommand(
+      temple, ws, {fs::path(ws).parent_path().string() + "/cylinder.ini"});
 }
 
 TEST(Pipeline, TempleEndToEndThenUpToDateThenResumesAfterKill) {

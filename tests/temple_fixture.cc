@@ -62,22 +62,35 @@ TempleSetup TempleConfigFixture() {
   return setup;
 }
 
+std::vector<std::string> TemplePipelineCommand(
+    const TempleSetup& setup,
+    const std::string& workspace,
+    const std::vector<std::string>& more_configs) {
+  std::vector<std::string> args = {
+      "pipeline",
+      "--workspace_path",
+      workspace,
+      "--image_path",
+      setup.images,
+      "--config",
+      std::string(BAYON_DEFAULT_SOURCE_DIR) + "/configs/ring.ini",
+      "--config",
+      setup.config,
+      "--num_threads",
+      "2"};
+  for (const std::string& config : more_configs) {
+    args.push_back("--config");
+    args.push_back(config);
+  }
+  return args;
+}
+
 std::string TemplePipelineWorkspace() {
   const TempleSetup setup = TempleConfigFixture();
   const std::string dir =
       SharedFixture("temple_pipeline", [&](const std::string& d) {
         const std::string ws = d + "/ws";
-        RunOrThrow({"pipeline",
-                    "--workspace_path",
-                    ws,
-                    "--image_path",
-                    setup.images,
-                    "--config",
-                    std::string(BAYON_DEFAULT_SOURCE_DIR) + "/configs/ring.ini",
-                    "--config",
-                    setup.config,
-                    "--num_threads",
-                    "2"});
+        RunOrThrow(TemplePipelineCommand(setup, ws));
         RunOrThrow({"evaluate",
                     "--input_path",
                     ws + "/sparse/adjusted",

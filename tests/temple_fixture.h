@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace bayon {
 namespace testing {
@@ -18,6 +19,13 @@ struct TempleSetup {
   std::string config;
 };
 TempleSetup TempleConfigFixture();
+
+// `bayon pipeline` on temple-ring into `workspace`: configs/ring.ini, the
+// setup's config, then `more_configs`, on 2 threads.
+std::vector<std::string> TemplePipelineCommand(
+    const TempleSetup& setup,
+    const std::string& workspace,
+    const std::vector<std::string>& more_configs = {});
 
 // The workspace `bayon pipeline` makes of temple-ring with configs/ring.ini
 // and that config (about 60 s on 2 cores), with `bayon evaluate`'s

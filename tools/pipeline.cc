@@ -73,10 +73,17 @@ struct PipelineSettings {
   std::string features = "bayon";             // bayon | colmap_sift
   std::string sparse = "bayon";               // bayon | colmap_mapper
   std::string colmap_matcher = "exhaustive";  // exhaustive | sequential
-  bool compare_colmap = false;
+  std::string compare_colmap = "0";           // 0 | 1
   // Options of COLMAP's commands by command name ([feature_extractor] ...).
   std::map<std::string, Options> colmap_options;
 };
+
+// The values each [pipeline] key takes, its default first.
+const std::map<std::string, std::vector<std::string>> kPipelineChoices = {
+    {"features", {"bayon", "colmap_sift"}},
+    {"sparse", {"bayon", "colmap_mapper"}},
+    {"colmap_matcher", {"exhaustive", "sequential"}},
+    {"compare_colmap", {"0", "1"}}};
 
 struct Config {
   std::string description;  // the files read, for the summary
@@ -134,61 +141,41 @@ Config ReadConfigs(const std::vector<std::string>& paths) {
                         "under the stage it belongs to, e.g. [dense]");
       }
       const std::string section = item.parents[0];
-      std::vector<std::string> key_parts(item.parents.begin() + 1,
-                                         item.parents.end());
-      key_parts.push_back(item.name);
-      std::string key;
-      for (const std::string& part : key_parts) {
-        key += (key.empty() ? "" : ".") + part;
-      }
+      // Dotted keys (COLMAP's SiftExtraction.max_image_size) come back as
+      // deeper parents.
+      const std::string key = item.fullname().substr(section.size() + 1);
       std::string value;
       for (const std::string& input : item.inputs) {
         value += (value.empty() ? "" : ",") + input;
       }
       if (section == "pipeline") {
         PipelineSettings& s = config.settings;
-        if (key == "features") {
-          if (value != "bayon" && value != "colmap_sift") {
-            ThrowInputError(path,
-                            ": [pipeline] features must be bayon or "
-                            "colmap_sift (got ",
-                            value,
-                            ")");
-          }
-          s.features = value;
-        } else if (key == "sparse") {
-          if (value != "bayon" && value != "colmap_mapper") {
-            ThrowInputError(path,
-                            ": [pipeline] sparse must be bayon or "
-                            "colmap_mapper (got ",
-                            value,
-                            ")");
-          }
-          s.sparse = value;
-        } else if (key == "colmap_matcher") {
-          if (value != "exhaustive" && value != "sequential") {
-            ThrowInputError(path,
-                            ": [pipeline] colmap_matcher must be exhaustive or "
-                            "sequential (got ",
-                            value,
-                            ")");
-          }
-          s.colmap_matcher = value;
-        } else if (key == "compare_colmap") {
-          if (value != "0" && value != "1") {
-            ThrowInputError(path,
-                            ": [pipeline] compare_colmap must be 0 or 1 (got ",
-                            value,
-                            ")");
-          }
-          s.compare_colmap = value == "1";
-        } else {
+        std::string* setting = key == "features"         ? &s.features
+                               : key == "sparse"         ? &s.sparse
+                               : key == "colmap_matcher" ? &s.colmap_matcher
+                               : key == "compare_colmap" ? &s.compare_colmap
+                                                         : nullptr;
+        if (setting == nullptr) {
           ThrowInputError(path,
                           ": unknown key '",
                           key,
                           "' in [pipeline] (known: features, sparse, "
                           "colmap_matcher, compare_colmap)");
         }
+        const std::vector<std::string>& allowed = kPipelineChoices.at(key);
+        if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
+          ThrowInputError(path,
+                          ": [pipeline] ",
+                          key,
+                          " must be ",
+                          allowed[0],
+                          " or ",
+                          allowed[1],
+                          " (got ",
+                          value,
+                          ")");
+        }
+        *setting = value;
       } else if (IsStageName(section)) {
         SetOption(&config.stage_options[section], key, value);
       } else if (IsColmapCommand(section)) {
@@ -413,8 +400,11 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
   add({"render",
        "bayon",
        "render",
+       // The oriented model is read only for --viewpoints stations.
        {{"model_path", In(w, "model/model.glb")},
         {"output_path", In(w, "renders")},
+        {"input_path", adjusted},
+        {"database_path", c.database},
         {"num_threads", threads}},
        true,
        {In(w, "renders")},
@@ -427,7 +417,7 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
        true,
        {In(w, "viewer/index.html")},
        {}});
-  if (s.compare_colmap) {
+  if (s.compare_colmap == "1") {
     Options compare = {{"workspace_path", w},
                        {"image_path", c.image_path},
                        {"num_threads", threads}};
@@ -477,16 +467,6 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
     if (stage.program == "bayon" && section != config.stage_options.end()) {
       for (const auto& [k, v] : section->second)
         SetOption(&stage.options, k, v);
-      // Renders from the photographs' stations need the oriented model.
-      if (stage.name == "render" &&
-          section->second.end() !=
-              std::find(section->second.begin(),
-                        section->second.end(),
-                        std::make_pair(std::string("viewpoints"),
-                                       std::string("stations")))) {
-        SetOption(&stage.options, "input_path", adjusted);
-        SetOption(&stage.options, "database_path", c.database);
-      }
     }
     if (stage.program == "colmap") {
       const auto colmap = s.colmap_options.find(stage.command);
@@ -636,18 +616,7 @@ void RunColmapStage(const Stage& stage, const Context& c) {
                                     ")"));
   }
   if (!mapper) return;
-  std::string best;
-  uintmax_t best_size = 0;
-  for (const auto& entry : fs::directory_iterator(mapper_output)) {
-    const fs::path images = entry.path() / "images.bin";
-    if (!fs::exists(images)) continue;
-    // images.bin grows with the registered images and their observations.
-    const uintmax_t size = fs::file_size(images);
-    if (size > best_size) {
-      best = entry.path().string();
-      best_size = size;
-    }
-  }
+  const std::string best = LargestModel(mapper_output);
   if (best.empty()) {
     throw std::runtime_error(StrCat(
         "colmap mapper registered no images (log: ", result.log_path, ")"));
@@ -710,25 +679,23 @@ void WriteRunJson(const Context& c,
 // stage runs: a misspelt key in a config stops the run at once.
 void CheckStageOptions(const std::vector<Stage>& stages,
                        const std::string& config) {
-  CommandLine::SetCheckOnly(true);
-  try {
-    for (const Stage& stage : stages) {
-      if (stage.program != "bayon") continue;
-      try {
-        RunBayonCommand(stage.command, CommandWords(stage, true));
-      } catch (const CLI::ParseError& error) {
-        ThrowInputError(config.empty() ? "pipeline" : config,
-                        ": stage ",
-                        stage.name,
-                        ": ",
-                        error.what());
-      }
+  // Back to running the stages however this ends.
+  struct CheckOnly {
+    CheckOnly() { CommandLine::SetCheckOnly(true); }
+    ~CheckOnly() { CommandLine::SetCheckOnly(false); }
+  } check_only;
+  for (const Stage& stage : stages) {
+    if (stage.program != "bayon") continue;
+    try {
+      RunBayonCommand(stage.command, CommandWords(stage, true));
+    } catch (const CLI::ParseError& error) {
+      ThrowInputError(config.empty() ? "pipeline" : config,
+                      ": stage ",
+                      stage.name,
+                      ": ",
+                      error.what());
     }
-  } catch (...) {
-    CommandLine::SetCheckOnly(false);
-    throw;
   }
-  CommandLine::SetCheckOnly(false);
 }
 
 }  // namespace
@@ -780,7 +747,9 @@ int RunPipeline(int argc, char** argv) {
     }
   }
   Config config = ReadConfigs(config_paths);
-  if (compare_colmap >= 0) config.settings.compare_colmap = compare_colmap == 1;
+  if (compare_colmap >= 0) {
+    config.settings.compare_colmap = std::to_string(compare_colmap);
+  }
   if (c.image_path.empty()) c.image_path = In(c.workspace, "images");
   CheckDirectoryExists(c.image_path, "--image_path");
   if (ListImages(c.image_path).empty()) {
@@ -824,11 +793,11 @@ int RunPipeline(int argc, char** argv) {
                                            : config.description);
 
   const auto start = std::chrono::steady_clock::now();
-  auto elapsed = [&] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                         start)
+  auto seconds_since = [](std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
         .count();
   };
+  auto elapsed = [&] { return seconds_since(start); };
   std::vector<StageRun> runs;
   std::optional<fs::file_time_type> previous_stamp;
   const int num_selected = last - first + 1;
@@ -869,36 +838,35 @@ int RunPipeline(int argc, char** argv) {
     fs::remove(StampPath(c, stage.name));
     RemoveStaleTemporaries(stage);
     const auto stage_start = std::chrono::steady_clock::now();
-    int code = 0;
+    // A stage that fails is recorded in pipeline.json before the run stops:
+    // bad input (exit 2, the stage named), or nothing usable (exit 1).
+    auto record_failure = [&](const std::string& reason) {
+      run.seconds = seconds_since(stage_start);
+      run.status = "failed";
+      run.reason = reason;
+      runs.push_back(run);
+      WriteRunJson(c, config.description, runs, elapsed());
+    };
     std::string failure;
     try {
       if (stage.program == "colmap") {
         RunColmapStage(stage, c);
-      } else {
-        code = RunBayonCommand(stage.command, words);
-        if (code != 0) failure = "produced nothing usable (exit 1)";
+      } else if (RunBayonCommand(stage.command, words) != 0) {
+        failure = "produced nothing usable (exit 1)";
       }
     } catch (const InputError& error) {
-      run.status = "failed";
-      run.reason = error.what();
-      runs.push_back(run);
-      WriteRunJson(c, config.description, runs, elapsed());
+      record_failure(error.what());
       ThrowInputError("stage ", stage.name, ": ", error.what());
     } catch (const std::exception& error) {
       failure = error.what();
     }
-    run.seconds = std::chrono::duration<double>(
-                      std::chrono::steady_clock::now() - stage_start)
-                      .count();
     if (!failure.empty()) {
-      run.status = "failed";
-      run.reason = failure;
-      runs.push_back(run);
-      WriteRunJson(c, config.description, runs, elapsed());
+      record_failure(failure);
       std::cerr << "pipeline: stage " << stage.name << " failed: " << failure
                 << "; its log is in " << In(c.workspace, "logs") << std::endl;
       return 1;
     }
+    run.seconds = seconds_since(stage_start);
     nlohmann::ordered_json stamp;
     stamp["command"] = words;
     stamp["seconds"] = run.seconds;
