@@ -370,7 +370,8 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
         InteriorRecord record;
         record.frame = scene.stations[i].frame ? *scene.stations[i].frame
                                                : scene.camera.DefaultFrame();
-        record.method = scene.stations[i].frame ? "synthetic_truth" : "digital";
+        record.method = scene.stations[i].frame ? "synthetic_truth"
+                                                : kDigitalInteriorMethod;
         WriteInterior(&database, image_id, record);
       }
     }

@@ -84,7 +84,7 @@ SyntheticWorkspaceSummary WriteSyntheticWorkspace(
     for (const auto& [image_id, image] : truth.scene.images) {
       InteriorRecord interior;
       interior.frame = truth.scene.cameras.at(image.camera_id).DefaultFrame();
-      interior.method = "digital";
+      interior.method = kDigitalInteriorMethod;
       WriteInterior(&database, image_id, interior);
     }
     transaction.Commit();
