@@ -10,6 +10,12 @@ if(BAYON_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer
                       -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
+  # With clang, every library is also instrumented for coverage so that the
+  # libFuzzer harnesses of tests/fuzz can be linked against it.
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    add_compile_options(-fsanitize=fuzzer-no-link)
+    set(BAYON_FUZZ ON)
+  endif()
 endif()
 
 # bayon_add_library(NAME core SRCS a.cc b.cc PUBLIC_LINK ... PRIVATE_LINK ...)

@@ -3,17 +3,27 @@
 # builds it in Release. Idempotent: with everything present it only runs an
 # incremental build.
 #   scripts/setup.sh              build into build/
-#   scripts/setup.sh --sanitize   AddressSanitizer + UBSan build into build-asan/
+#   scripts/setup.sh --sanitize   AddressSanitizer + UBSan build with clang into
+#                                 build-asan/, with the libFuzzer harnesses of
+#                                 tests/fuzz (scripts/fuzz.sh runs them)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 build_dir=build
+sanitize=0
 cmake_args=(-DCMAKE_BUILD_TYPE=Release)
 for arg in "$@"; do
   case "$arg" in
     --sanitize)
+      # clang, because libFuzzer comes with it; line tables only, because full
+      # debug information doubles the build time and stack traces need no more.
       build_dir=build-asan
-      cmake_args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DBAYON_SANITIZE=ON) ;;
+      sanitize=1
+      cmake_args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DBAYON_SANITIZE=ON
+                  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
+                  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG"
+                  "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG"
+                  -DBAYON_BUILD_BENCHMARKS=OFF -DBAYON_WERROR=OFF) ;;
     *) echo "setup.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
@@ -31,6 +41,8 @@ packages=(
 # bayon viewer's page is built with npm (tools/viewer); a Node.js from another
 # source (which brings its own npm) is kept.
 if ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
+# The sanitizer build: clang with its runtimes (ASan, UBSan, libFuzzer).
+if [ "$sanitize" = 1 ]; then packages+=(clang libclang-rt-14-dev); fi
 missing=()
 for package in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every test through ctest.
 #   scripts/test.sh                 all tests (unit + end-to-end)
-#   scripts/test.sh --sanitize      the same under AddressSanitizer + UBSan
+#   scripts/test.sh --sanitize      under AddressSanitizer + UBSan (clang): the
+#                                   unit tests and the end-to-end tests of
+#                                   $sanitize_e2e, or those given after --
 #   scripts/test.sh -- -R Camera    extra arguments after -- go to ctest
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,6 +11,9 @@ cd "$(dirname "$0")/.."
 setup_args=()
 ctest_args=()
 build_dir=build
+# The end-to-end tests run under the sanitizers by default (a regex of ctest
+# names): the whole temple pipeline, bad input, concurrent writers.
+sanitize_e2e='^(Pipeline|BadInput|BadModel|Concurrency)\.'
 while [ $# -gt 0 ]; do
   case "$1" in
     --sanitize) setup_args+=(--sanitize); build_dir=build-asan ;;
@@ -20,4 +25,17 @@ done
 
 scripts/setup.sh "${setup_args[@]}"
 cd "$build_dir"
+if [ "$build_dir" = build-asan ]; then
+  # Any finding fails the test that made it, with a stack trace; bayon's
+  # child processes inherit these.
+  export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
+  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+  if [ ${#ctest_args[@]} -eq 0 ]; then
+    # Within CI's budget: every unit test (the fuzz harnesses' replays among
+    # them) and the end-to-end tests that run every stage on small data.
+    ctest --output-on-failure -j"$(nproc)" -L unit
+    ctest --output-on-failure -j"$(nproc)" -R "$sanitize_e2e"
+    exit 0
+  fi
+fi
 ctest --output-on-failure -j"$(nproc)" "${ctest_args[@]}"

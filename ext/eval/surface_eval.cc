@@ -149,7 +149,7 @@ VisibleSurface FindVisibleSurface(const TriangleMesh& surface,
     const ImageFrame* frame = image.frame ? &*image.frame : nullptr;
     ParallelFor(
         static_cast<int>(candidates.size()), options.num_threads, [&](int i) {
-          const Eigen::Vector3d in_cam = image.cam_from_world * candidates[i];
+          const Eigen::Vector3d in_cam = view.cam_from_world * candidates[i];
           Eigen::Vector2d pixel;
           if (in_cam.z() <= 0 ||
               !view.camera.ImgFromCam(in_cam, &pixel, frame)) {

@@ -694,9 +694,11 @@ TiePointSummary FindTiePoints(const std::string& database_path,
                      candidates.end());
     summary.num_followed += static_cast<int>(candidates.size());
     std::vector<Chain> chains(candidates.size());
+    // A copy: C++17 lambdas cannot capture a structured binding (clang).
+    const image_t start_id = image_id;
     ParallelFor(
         static_cast<int>(candidates.size()), options.num_threads, [&](int c) {
-          chains[c] = FollowCandidate(input, image_id, candidates[c], options);
+          chains[c] = FollowCandidate(input, start_id, candidates[c], options);
         });
     // Sequentially, best candidates first: one point per place.
     for (Chain& chain : chains) {
