@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -53,6 +54,7 @@ class Tokens {
   }
 
   int line() const { return line_; }
+  size_t bytes_left() const { return text_.size() - pos_; }
 
  private:
   void SkipSpace() {
@@ -92,9 +94,14 @@ Scene ReadBalProblem(const std::string& path) {
     int point;
     Eigen::Vector2d xy;
   };
-  std::vector<Observation> observations(num_observations);
+  // Grown as they are read: a forged count would allocate before the file
+  // ends (each observation takes at least 8 bytes of text).
+  std::vector<Observation> observations;
+  observations.reserve(
+      std::min<size_t>(num_observations, tokens.bytes_left() / 8));
   double extent = 1.0;
-  for (Observation& o : observations) {
+  for (int i = 0; i < num_observations; ++i) {
+    Observation& o = observations.emplace_back();
     o.camera = tokens.Index("a camera index", num_cameras);
     o.point = tokens.Index("a point index", num_points);
     o.xy.x() = tokens.Number("x");
@@ -102,7 +109,11 @@ Scene ReadBalProblem(const std::string& path) {
     extent = std::max(extent, o.xy.cwiseAbs().maxCoeff());
   }
   // The principal point in the middle of a square frame that holds every
-  // observation (pixel coordinates must be positive for COLMAP).
+  // observation (pixel coordinates must be positive for COLMAP); the frame's
+  // size must fit in an int.
+  if (extent > 1e8) {
+    ThrowInputError(path, ": an observation lies ", extent, " pixels out");
+  }
   const double centre = std::ceil(extent) + 1.0;
   const uint64_t size = static_cast<uint64_t>(2 * centre);
 

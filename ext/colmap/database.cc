@@ -75,7 +75,10 @@ MatrixType ReadMatrixBlob(const SqliteStatement& statement,
        cols != MatrixType::ColsAtCompileTime)) {
     ThrowInputError(what, ": bad blob shape ", rows, " x ", cols);
   }
-  if (rows * cols * static_cast<int64_t>(sizeof(Scalar)) != num_bytes) {
+  // rows * cols fits in 64 bits, times sizeof(Scalar) it may not.
+  const int64_t scalar_bytes = sizeof(Scalar);
+  if (num_bytes % scalar_bytes != 0 ||
+      rows * cols != num_bytes / scalar_bytes) {
     ThrowInputError(what,
                     ": blob holds ",
                     num_bytes,
@@ -678,6 +681,9 @@ void Database::WriteDescriptors(image_t image_id,
 namespace {
 
 FeatureMatches SwapColumns(const FeatureMatches& matches) {
+  // Columns of an empty matrix (COLMAP's rows = 0) would offset a null
+  // pointer.
+  if (matches.rows() == 0) return FeatureMatches(0, 2);
   FeatureMatches swapped(matches.rows(), 2);
   swapped.col(0) = matches.col(1);
   swapped.col(1) = matches.col(0);

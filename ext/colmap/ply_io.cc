@@ -165,10 +165,17 @@ class BodyReader {
     return 0;
   }
 
-  // Binary only: can `count` records of at least `bytes` each still follow?
+  // Can `count` records of at least `bytes` each still follow? In ASCII a
+  // value takes a character and a separator (which the file's last value
+  // may lack), so callers give 2 bytes per value.
   void NeedRecords(uint64_t count, size_t bytes, const std::string& what) {
-    if (format_ == PlyFormat::kAscii || bytes == 0) return;
-    if (count > (data_.size() - offset_) / bytes) {
+    if (bytes == 0) return;
+    size_t left = data_.size() - offset_;
+    if (format_ == PlyFormat::kAscii) {
+      const std::streamoff position = text_.tellg();
+      left = position < 0 ? 1 : left - static_cast<size_t>(position) + 1;
+    }
+    if (count > left / bytes) {
       Fail(StrCat(what,
                   ": ",
                   count,
@@ -314,8 +321,15 @@ TriangleMesh ReadPly(const std::string& path) {
       fixed_bytes += property.is_list ? TypeSize(property.count_type)
                                       : TypeSize(property.type);
     }
-    reader.NeedRecords(element.count, fixed_bytes, "element " + element.name);
+    reader.NeedRecords(element.count,
+                       format == PlyFormat::kAscii
+                           ? 2 * element.properties.size()
+                           : fixed_bytes,
+                       "element " + element.name);
     if (element.name == "vertex") {
+      // A second vertex element would index the first one's arrays.
+      if (have_vertices)
+        ThrowInputError(path, ": more than one vertex element");
       have_vertices = true;
       int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, r = -1, g = -1,
           b = -1;
@@ -416,14 +430,21 @@ TriangleMesh ReadPly(const std::string& path) {
             continue;
           }
           const double count = reader.Read(p.count_type, "a face list count");
-          if (count < 0 || count > 1e6) {
+          // Written so that NaN fails too (a float count type allows it).
+          if (!(count >= 0 && count <= 1e6)) {
             reader.Fail(StrCat("face ", f, " has a list of ", count, " items"));
           }
           std::vector<double> items(static_cast<size_t>(count));
           for (double& item : items)
             item = reader.Read(p.type, "a face list item");
           if (static_cast<int>(i) == indices) {
-            for (double item : items) polygon.push_back(static_cast<int>(item));
+            for (double item : items) {
+              // Beyond int the cast is undefined; Check() refuses the rest.
+              if (!(std::abs(item) <= std::numeric_limits<int>::max())) {
+                reader.Fail(StrCat("face ", f, " has vertex index ", item));
+              }
+              polygon.push_back(static_cast<int>(item));
+            }
           } else if (static_cast<int>(i) == texcoord) {
             for (double item : items) uv.push_back(static_cast<float>(item));
           }
@@ -451,7 +472,7 @@ TriangleMesh ReadPly(const std::string& path) {
         for (const PlyProperty& p : element.properties) {
           if (p.is_list) {
             const double count = reader.Read(p.count_type, "a list count");
-            if (count < 0 || count > 1e6) reader.Fail("bad list count");
+            if (!(count >= 0 && count <= 1e6)) reader.Fail("bad list count");
             for (int k = 0; k < static_cast<int>(count); ++k)
               reader.Read(p.type, "a list item");
           } else {

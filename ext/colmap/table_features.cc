@@ -50,8 +50,9 @@ std::optional<KeypointInterestRecord> ReadKeypointInterest(Database* database,
   record.window_size = static_cast<int>(statement.ColumnInt64(1));
   record.patch_size = static_cast<int>(statement.ColumnInt64(2));
   const int64_t rows = statement.ColumnInt64(3);
-  if (rows < 0 ||
-      statement.ColumnBytes(4) != static_cast<int>(rows * sizeof(float))) {
+  // In 64 bits: a forged count must not wrap around to the blob's size.
+  if (rows < 0 || rows > INT32_MAX ||
+      statement.ColumnBytes(4) != rows * static_cast<int64_t>(sizeof(float))) {
     ThrowInputError(database->path(),
                     ": bayon_keypoint_interest row of image ",
                     image_id,

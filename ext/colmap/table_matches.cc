@@ -111,12 +111,15 @@ std::optional<MatchRecord> ReadMatchRecord(Database* database,
   record.seconds = statement.ColumnDouble(4);
   const int64_t rows = statement.ColumnInt64(5);
   const int64_t bytes = statement.ColumnBytes(6);
+  // A forged count would overflow the products below.
+  const bool rows_ok = rows >= 0 && rows <= INT32_MAX;
   const int per_row =
-      rows > 0 && bytes == static_cast<int64_t>(rows * kFloatsPerOldRow *
-                                                sizeof(float))
+      rows_ok && rows > 0 &&
+              bytes ==
+                  static_cast<int64_t>(rows * kFloatsPerOldRow * sizeof(float))
           ? kFloatsPerOldRow
           : kFloatsPerRow;
-  if (rows < 0 ||
+  if (!rows_ok ||
       bytes != static_cast<int64_t>(rows * per_row * sizeof(float))) {
     ThrowInputError(database->path(),
                     ": bayon_matches row of pair (",

@@ -12,6 +12,8 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -24,6 +26,58 @@ std::string LowerExtension(const std::string& path) {
     return static_cast<char>(std::tolower(c));
   });
   return ext;
+}
+
+// OpenMesh reserves memory for the counts in an OFF header before it reads a
+// vertex, so a damaged or forged header (a billion vertices in 50 bytes)
+// would exhaust memory: the counts are checked against the file's size
+// first. Every vertex has three numbers and every face at least four, each
+// followed by a separator.
+void CheckOffHeader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  std::string keyword;
+  while (std::getline(in, line)) {
+    const size_t start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos || line[start] == '#') continue;
+    keyword = line.substr(start);
+    break;
+  }
+  const size_t off = keyword.find("OFF");
+  const bool prefix_ok =
+      off != std::string::npos &&
+      keyword.find_first_not_of("STCN4n") >= off;  // [ST][C][N][4][n]OFF
+  if (!prefix_ok) ThrowInputError(path, ": not an OFF mesh (no OFF header)");
+  if (keyword.find("BINARY") != std::string::npos) {
+    ThrowInputError(path,
+                    ": binary OFF is not supported (use ASCII OFF or PLY)");
+  }
+  // The counts follow the keyword on its line or on the next line.
+  std::istringstream rest(keyword.substr(off + 3));
+  long long num_vertices = -1;
+  long long num_faces = -1;
+  if (!(rest >> num_vertices >> num_faces)) {
+    while (std::getline(in, line)) {
+      const size_t start = line.find_first_not_of(" \t\r");
+      if (start == std::string::npos || line[start] == '#') continue;
+      std::istringstream counts(line);
+      counts >> num_vertices >> num_faces;
+      break;
+    }
+  }
+  const long long file_size = static_cast<long long>(fs::file_size(path));
+  if (num_vertices < 0 || num_faces < 0 || num_vertices > file_size / 6 ||
+      num_faces > file_size / 8 ||
+      num_vertices * 6 + num_faces * 8 > file_size) {
+    ThrowInputError(path,
+                    ": the OFF header's vertex and face counts (",
+                    num_vertices,
+                    ", ",
+                    num_faces,
+                    ") are missing or more than its ",
+                    file_size,
+                    " bytes can hold");
+  }
 }
 
 }  // namespace
@@ -95,6 +149,7 @@ void WriteMesh(const TriangleMesh& mesh, const std::string& path) {
   if (normals) io_options += OpenMesh::IO::Options::VertexNormal;
   if (colors) io_options += OpenMesh::IO::Options::VertexColor;
   // Full precision for the coordinates.
+  RemoveStaleTemporaries(path);
   const std::string temp = path + TempSuffix() + ext;
   TempFileGuard guard(temp);
   if (!OpenMesh::IO::write_mesh(om, temp, io_options, 17)) {
@@ -117,6 +172,7 @@ TriangleMesh ReadMesh(const std::string& path) {
   }
   if (ext == ".ply") return ReadMeshPly(path);
   CheckFileExists(path, "mesh");
+  if (ext == ".off") CheckOffHeader(path);
   OmMesh om;
   om.request_vertex_normals();
   om.request_vertex_colors();

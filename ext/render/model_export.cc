@@ -608,7 +608,9 @@ TexturedModel ReadVrml(const std::string& path) {
       size_t end = i;
       while (end < text.size() &&
              !std::isspace(static_cast<unsigned char>(text[end])) &&
-             std::strchr(",[]{}#\"", text[end]) == nullptr) {
+             // memchr, not strchr: strchr finds a NUL byte (the string's
+             // end), and a token that ends before it starts never advances.
+             std::memchr(",[]{}#\"", text[end], 7) == nullptr) {
         ++end;
       }
       tokens.push_back(text.substr(i, end - i));
