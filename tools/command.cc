@@ -75,7 +75,14 @@ void CommandLine::StartLog(const std::string& log_path) {
   if (log_path.empty()) return;
   std::error_code ec;
   const fs::path path(log_path);
-  if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
+  if (path.has_parent_path()) {
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) {
+      ThrowInputError(path.parent_path().string(),
+                      ": cannot create the log folder: ",
+                      ec.message());
+    }
+  }
   auto sink = std::make_shared<FileLogSink>(log_path);
   google::AddLogSink(sink.get());
   log_sink_ = std::shared_ptr<google::LogSink>(

@@ -198,6 +198,7 @@ int RunImport(int argc, char** argv) {
     new_names = names;
   }
   const int num_skipped = static_cast<int>(names.size() - new_names.size());
+  CheckCanWrite(options.database_path, "the database");
   const std::vector<ImageFacts> facts = InspectImages(options, new_names);
   if (options.single_camera && !facts.empty()) {
     for (const ImageFacts& fact : facts) {
@@ -222,12 +223,13 @@ int RunImport(int argc, char** argv) {
   // A new database is built under a temporary name and renamed when done,
   // so an interrupted import never leaves a half-filled file behind.
   const bool created = !fs::exists(options.database_path);
+  if (created) RemoveStaleTemporaries(options.database_path);
   const std::string target =
       created ? options.database_path + TempSuffix() : options.database_path;
   TempFileGuard temp_guard(created ? target : std::string());
   if (!created) temp_guard.Keep();
   int num_added = 0, num_cameras = 0, num_priors = 0;
-  {
+  try {
     Database database(
         target, created ? Database::Mode::kCreate : Database::Mode::kReadWrite);
     CheckBayonSchema(&database);
@@ -250,6 +252,13 @@ int RunImport(int argc, char** argv) {
       ++num_added;
     }
     transaction.Commit();
+  } catch (const InputError& error) {
+    // Name the database the user gave, not its temporary (a full disk).
+    std::string message = error.what();
+    if (created && message.rfind(target, 0) == 0) {
+      message.replace(0, target.size(), options.database_path);
+    }
+    throw InputError(message);
   }
   if (created) {
     fs::rename(target, options.database_path);

@@ -48,8 +48,20 @@ int RunModelConverter(int argc, char** argv) {
           (fs::path(output_path) / (std::string(name) + ext)).string(),
           overwrite);
     }
-    fs::create_directories(output_path, ec);
-    WriteModel(scene, output_path, format);
+    // The three files are written into a temporary folder and moved in
+    // only when all are complete: a full disk or a kill midway never leaves
+    // a new cameras file beside an old images file.
+    OutputDirectory staging(output_path, /*overwrite=*/true);
+    WriteModel(scene, staging.temp_path(), format);
+    if (!fs::exists(output_path, ec)) {
+      staging.Commit();
+    } else {
+      for (const char* name : {"cameras", "images", "points3D"}) {
+        const std::string file = std::string(name) + ext;
+        fs::rename(staging.File(file), fs::path(output_path) / file, ec);
+        if (ec) ThrowInputError(output_path, "/", file, ": ", ec.message());
+      }
+    }
   }
   const SceneStats stats = scene.Stats();
   command.PrintSummary(StrCat(stats.num_cameras,

@@ -444,7 +444,9 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
       SetOption(&evaluate, "mesh_path", mesh);
     }
     if (fs::is_directory(In(w, "gt/heldout"))) {
-      SetOption(&evaluate, "textured_mesh_path", In(w, "model/model.obj"));
+      // evaluate reads the textured model as PLY (its TextureFile comment
+      // names the atlas).
+      SetOption(&evaluate, "textured_mesh_path", In(w, "model/model.ply"));
     }
     add({"evaluate",
          "bayon",

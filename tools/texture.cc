@@ -173,15 +173,28 @@ int RunTexture(int argc, char** argv) {
   TexturedMesh textured = MapTexture(mesh, images, options);
   textured.report.seconds_load = seconds_load;
   fs::create_directories(output_path);
-  const std::vector<std::string> files =
-      WriteTexturedModel(TexturedModel{textured.mesh, textured.atlas},
-                         output_path,
-                         export_options);
+  // The files are written into a temporary folder and moved in when all are
+  // complete: a full disk midway never leaves a new atlas beside an old
+  // model (or a model without its texture.json).
+  OutputDirectory staging(output_path, /*overwrite=*/true);
+  std::vector<std::string> files;
+  for (const std::string& file :
+       WriteTexturedModel(TexturedModel{textured.mesh, textured.atlas},
+                          staging.temp_path(),
+                          export_options)) {
+    files.push_back(
+        (fs::path(output_path) / fs::path(file).filename()).string());
+  }
   WriteFileAtomically(
-      report_path,
+      staging.File("texture.json"),
       ReportToJson(textured.report, options, mesh_path, files)
               .dump(2, ' ', false, nlohmann::json::error_handler_t::replace) +
           "\n");
+  for (const std::string& file : files) {
+    const std::string name = fs::path(file).filename().string();
+    fs::rename(staging.File(name), file);
+  }
+  fs::rename(staging.File("texture.json"), report_path);
   std::string written;
   for (const std::string& file : files) {
     written +=

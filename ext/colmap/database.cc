@@ -307,6 +307,9 @@ void Database::CheckWritable(const char* what) const {
   if (connection_->read_only()) {
     ThrowInputError(path(), ": opened read-only, cannot write ", what);
   }
+  // SQLite opens a file it may not write read-only without a word, and
+  // fails only at the first write; its journal needs the folder as well.
+  CheckCanWrite(path(), what);
   if (schema_ == DatabaseSchema::kColmap312 ||
       schema_ == DatabaseSchema::kColmap40) {
     ThrowInputError(path(),

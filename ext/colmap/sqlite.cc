@@ -5,9 +5,30 @@
 
 #include <sqlite3.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 namespace bayon {
+namespace {
+
+// How long a connection waits for another program's lock before it gives up
+// with "database is locked": 60 s, or $BAYON_DATABASE_TIMEOUT seconds for
+// a user whose other program holds it longer (or a test that cannot wait).
+int BusyTimeoutMs() {
+  const char* env = std::getenv("BAYON_DATABASE_TIMEOUT");
+  if (!env || !*env) return 60000;
+  char* end = nullptr;
+  const double seconds = std::strtod(env, &end);
+  if (*end != '\0' || !(seconds >= 0 && seconds <= 86400)) {
+    ThrowInputError("BAYON_DATABASE_TIMEOUT='",
+                    env,
+                    "' is not a number of seconds from 0 to 86400");
+  }
+  return static_cast<int>(seconds * 1000);
+}
+
+}  // namespace
 
 SqliteStatement::SqliteStatement(SqliteConnection* connection,
                                  const std::string& sql)
@@ -144,7 +165,7 @@ SqliteConnection::SqliteConnection(const std::string& path, Mode mode)
   }
   // Wait for a concurrent writer (another bayon or colmap) instead of failing
   // at once; COLMAP's own connections do not wait, so be patient here.
-  sqlite3_busy_timeout(db_, 60000);
+  sqlite3_busy_timeout(db_, BusyTimeoutMs());
   sqlite3_extended_result_codes(db_, 1);
   // Reading the schema is the first real access: a file that is not SQLite
   // fails here with "file is not a database".
@@ -170,7 +191,11 @@ void SqliteConnection::Check(int rc, const std::string& what) const {
   std::string hint;
   if (primary == SQLITE_NOTADB) hint = " (the file is not an SQLite database)";
   if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED) {
-    hint = " (another program holds the database; try again when it is done)";
+    char waited[32];
+    std::snprintf(waited, sizeof(waited), "%g", BusyTimeoutMs() / 1000.0);
+    hint = std::string(" (another program held the database for longer than ") +
+           waited + " s; try again when it is done, or set " +
+           "BAYON_DATABASE_TIMEOUT)";
   }
   if (primary == SQLITE_READONLY) hint = " (the database is read-only)";
   if (primary == SQLITE_FULL) hint = " (the disk is full)";

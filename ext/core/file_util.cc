@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <sys/types.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -22,7 +24,50 @@ std::string TempSuffix() {
   return StrCat(".tmp-", ::getpid(), "-", counter++);
 }
 
+namespace {
+
+// The writer's pid in a temporary name that starts with `prefix`
+// ("<name>.tmp-"), or 0 where the rest is not "<pid>-...".
+pid_t TemporaryOwner(const std::string& name, const std::string& prefix) {
+  if (name.rfind(prefix, 0) != 0) return 0;
+  const size_t begin = prefix.size();
+  const size_t end = name.find('-', begin);
+  if (end == std::string::npos || end == begin || end - begin > 9) return 0;
+  pid_t pid = 0;
+  for (size_t i = begin; i < end; ++i) {
+    if (name[i] < '0' || name[i] > '9') return 0;
+    pid = pid * 10 + (name[i] - '0');
+  }
+  return pid;
+}
+
+}  // namespace
+
+void RemoveStaleTemporaries(const std::string& path) {
+  fs::path target = fs::path(path).lexically_normal();
+  if (!target.has_filename()) target = target.parent_path();
+  const std::string name = target.filename().string();
+  if (name.empty()) return;
+  fs::path folder = target.parent_path();
+  if (folder.empty()) folder = ".";
+  std::error_code ec;
+  std::vector<fs::path> stale;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string entry_name = entry.path().filename().string();
+    for (const std::string& prefix : {name + ".tmp-", name + ".old.tmp-"}) {
+      const pid_t pid = TemporaryOwner(entry_name, prefix);
+      // Another process's, and that process is gone (kill -9, a crash).
+      if (pid > 0 && pid != ::getpid() && ::kill(pid, 0) != 0 &&
+          errno == ESRCH) {
+        stale.push_back(entry.path());
+      }
+    }
+  }
+  for (const fs::path& p : stale) fs::remove_all(p, ec);
+}
+
 void WriteFileAtomically(const std::string& path, const std::string& content) {
+  RemoveStaleTemporaries(path);
   const std::string temp = path + TempSuffix();
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (fd < 0) {
@@ -79,6 +124,7 @@ OutputDirectory::OutputDirectory(const std::string& path, bool overwrite)
           path_, ": cannot create the parent folder: ", ec.message());
     }
   }
+  RemoveStaleTemporaries(path_);
   temp_path_ = path_ + TempSuffix();
   fs::create_directory(temp_path_, ec);
   if (ec)
@@ -144,6 +190,24 @@ void CheckOutputPath(const std::string& path, bool overwrite) {
   if (path.empty()) ThrowInputError("an output path is required");
   if (fs::exists(path, ec) && !overwrite) {
     ThrowInputError(path, ": exists already; pass --overwrite 1 to replace it");
+  }
+}
+
+void CheckCanWrite(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0) {
+    ThrowInputError(path, ": cannot write ", what, ": ", std::strerror(errno));
+  }
+  const fs::path folder = fs::absolute(path, ec).parent_path();
+  if (::access(folder.c_str(), W_OK | X_OK) != 0) {
+    ThrowInputError(path,
+                    ": cannot write ",
+                    what,
+                    ": the folder ",
+                    folder.string(),
+                    " is not writable (",
+                    std::strerror(errno),
+                    ")");
   }
 }
 

@@ -65,6 +65,13 @@ void CheckFileExists(const std::string& path, const std::string& what);
 void CheckDirectoryExists(const std::string& path, const std::string& what);
 // Throws InputError if `path` exists and `overwrite` is false.
 void CheckOutputPath(const std::string& path, bool overwrite);
+// Throws InputError unless this process may write `path`: an existing file
+// must be writable, and so must its folder (where a new file, a temporary or
+// SQLite's journal goes). Run as a user without the rights, or on a
+// read-only mount, the message names the path, `what` was to be written
+// there and why not ("Permission denied", "Read-only file system"), before
+// any work is done.
+void CheckCanWrite(const std::string& path, const std::string& what);
 
 // A fast 64-bit content hash (FNV-1a) of a file, for "input unchanged" checks.
 uint64_t FileHash(const std::string& path);
@@ -75,5 +82,12 @@ std::vector<std::string> ListFilesRecursive(const std::string& folder);
 
 // A unique suffix for temporary names: ".tmp-<pid>-<counter>".
 std::string TempSuffix();
+
+// Removes what a killed writer of `path` left beside it: files and folders
+// named "<name>.tmp-<pid>-..." or "<name>.old.tmp-<pid>-..." (TempSuffix,
+// OutputDirectory::Commit) whose process no longer runs. Temporaries of a
+// live process are left alone. WriteFileAtomically and OutputDirectory call
+// it, so a rerun after kill -9 leaves no stray temporaries.
+void RemoveStaleTemporaries(const std::string& path);
 
 }  // namespace bayon

@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
 
 #include "tests/testing.h"
 
@@ -44,6 +48,42 @@ TEST(FileUtil, UncommittedOutputDirectoryDisappears) {
   }
   EXPECT_TRUE(ListFilesRecursive(dir).empty());
   EXPECT_FALSE(fs::exists(dir + "/model"));
+}
+
+TEST(FileUtil, KilledWritersTemporariesAreRemovedByTheNextWrite) {
+  const std::string dir = testing::TempDir("file_util_stale");
+  // A pid that no longer runs: a child that has exited and been reaped.
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ASSERT_GT(child, 0);
+  ::waitpid(child, nullptr, 0);
+  const std::string dead = std::to_string(child);
+  const std::string live = std::to_string(::getpid());
+  // What kill -9 leaves: a file's temporary, a database's journal, an
+  // output folder being filled, an old folder moved aside by Commit().
+  WriteFileAtomically(dir + "/a.txt.tmp-" + dead + "-0", "partial");
+  WriteFileAtomically(dir + "/a.txt.tmp-" + dead + "-0-journal", "j");
+  fs::create_directories(dir + "/model.tmp-" + dead + "-1");
+  WriteFileAtomically(dir + "/model.tmp-" + dead + "-1/x.bin", "partial");
+  fs::create_directories(dir + "/model.old.tmp-" + dead + "-2");
+  // A running process's temporary, and names that only look alike.
+  WriteFileAtomically(dir + "/a.txt.tmp-" + live + "-7", "in progress");
+  WriteFileAtomically(dir + "/a.txt.tmp-notapid", "kept");
+  WriteFileAtomically(dir + "/b.txt.tmp-" + dead + "-0", "another file's");
+
+  WriteFileAtomically(dir + "/a.txt", "complete");
+  {
+    OutputDirectory output(dir + "/model", false);
+    WriteFileAtomically(output.File("x.bin"), "complete");
+    output.Commit();
+  }
+  EXPECT_EQ(ListFilesRecursive(dir),
+            (std::vector<std::string>{"a.txt",
+                                      "a.txt.tmp-" + live + "-7",
+                                      "a.txt.tmp-notapid",
+                                      "b.txt.tmp-" + dead + "-0",
+                                      "model/x.bin"}));
+  EXPECT_FALSE(fs::exists(dir + "/model.old.tmp-" + dead + "-2"));
 }
 
 }  // namespace
