@@ -30,6 +30,8 @@ if [ "$build_dir" = build-asan ]; then
   # child processes inherit these.
   export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+  # Leaks inside third-party libraries, each with its reason.
+  export LSAN_OPTIONS="suppressions=$PWD/../tests/sanitizers/lsan.supp:print_suppressions=0"
   if [ ${#ctest_args[@]} -eq 0 ]; then
     # Within CI's budget: every unit test (the fuzz harnesses' replays among
     # them) and the end-to-end tests that run every stage on small data.

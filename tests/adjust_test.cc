@@ -7,6 +7,7 @@
 #include "ext/colmap/model_io.h"
 #include "ext/colmap/table_tie_points.h"
 #include "ext/core/file_util.h"
+#include "ext/core/random.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -52,13 +53,12 @@ std::string SyntheticWorkspace() {
                std::mt19937 rng(5);
                std::normal_distribution<double> noise(0, 1);
                for (auto& [id, point] : scene.points3D) {
-                 point.xyz +=
-                     0.01 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+                 point.xyz += 0.01 * RandomVector<3>(noise, rng);
                }
                for (auto& [id, image] : scene.images) {
                  const Eigen::Vector3d center =
                      image.cam_from_world.Center() +
-                     0.03 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+                     0.03 * RandomVector<3>(noise, rng);
                  image.cam_from_world.translation =
                      -(image.cam_from_world.rotation * center);
                }

@@ -5,6 +5,7 @@
 #include "ext/colmap/bayon_tables.h"
 #include "ext/colmap/database.h"
 #include "ext/colmap/model_io.h"
+#include "ext/core/random.h"
 #include "ext/synth/points_scene.h"
 
 #include <Eigen/Dense>
@@ -52,11 +53,11 @@ TestBlock MakeBlock(unsigned seed,
   std::normal_distribution<double> noise(0, 1);
   for (BlockPoint& point : block.points) {
     test.true_xyz.push_back(point.xyz);
-    point.xyz += 0.02 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    point.xyz += 0.02 * RandomVector<3>(noise, rng);
   }
   for (BlockImage& image : block.images) {
     test.true_centers.push_back(image.center);
-    image.center += 0.05 * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    image.center += 0.05 * RandomVector<3>(noise, rng);
   }
   if (with_control) {
     for (size_t p = 0; p < block.points.size(); ++p) {
@@ -209,12 +210,13 @@ TEST(Adjustment, ObservationsAreWeightedByTheirCovariance) {
     for (BlockObservation& observation : block.observations) {
       const double angle = M_PI * uniform(rng);
       const Eigen::Matrix2d R = Eigen::Rotation2Dd(angle).toRotationMatrix();
-      const Eigen::Vector2d sigmas(0.03 + 0.47 * uniform(rng),
-                                   0.03 + 0.07 * uniform(rng));
+      const Eigen::Vector2d sigmas =
+          Eigen::Vector2d(0.03, 0.03) +
+          Eigen::Vector2d(0.47, 0.07)
+              .cwiseProduct(RandomVector<2>(uniform, rng));
       observation.SetCovariance(R * sigmas.cwiseAbs2().asDiagonal() *
                                 R.transpose());
-      observation.xy +=
-          R * sigmas.cwiseProduct(Eigen::Vector2d(normal(rng), normal(rng)));
+      observation.xy += R * sigmas.cwiseProduct(RandomVector<2>(normal, rng));
     }
     block.sigma0_px = 0.2;
     block.cameras[0].camera = test.truth.scene.cameras.at(1);  // the true one
@@ -270,7 +272,7 @@ TEST(Adjustment, VarianceComponentsFindEachGroupsPrecision) {
     BlockObservation& observation = block.observations[o];
     const bool tie = o % 2 == 0;
     const double sigma = tie ? 0.1 : 0.3;
-    observation.xy += sigma * Eigen::Vector2d(normal(rng), normal(rng));
+    observation.xy += sigma * RandomVector<2>(normal, rng);
     if (tie) {
       observation.SetCovariance(0.0025 * Eigen::Matrix2d::Identity());
     } else {

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/adjustment/resection.h"
 
+#include "ext/core/random.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -31,10 +33,10 @@ Observations Make(bool flat, unsigned seed) {
       -10 * (o.truth.rotation.inverse() * Eigen::Vector3d::UnitZ());
   o.truth.translation = -(o.truth.rotation * center);
   for (int i = 0; i < 80; ++i) {
-    const Eigen::Vector3d X(
-        uniform(rng), uniform(rng), flat ? 0 : uniform(rng));
+    Eigen::Vector3d X = RandomVector<3>(uniform, rng);
+    if (flat) X.z() = 0;
     Eigen::Vector2d xy = (o.truth * X).hnormalized();
-    xy += Eigen::Vector2d(noise(rng), noise(rng));
+    xy += RandomVector<2>(noise, rng);
     const bool outlier = i % 5 == 0;
     if (outlier)
       xy += (20 + 80 * (uniform(rng) + 2) / 4) / kFocalPx *

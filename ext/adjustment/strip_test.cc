@@ -6,6 +6,7 @@
 #include "ext/colmap/table_tie_points.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/core/random.h"
 #include "ext/eval/sparse_eval.h"
 #include "ext/synth/workspace_writer.h"
 
@@ -60,18 +61,15 @@ void DisturbRelativeOrientations(const std::string& database_path,
   auto transaction = database.BeginTransaction();
   for (auto& [pair_id, geometry] : database.ReadAllTwoViewGeometries()) {
     const auto [id1, id2] = ImageIdsFromPairId(pair_id);
-    const Eigen::Vector3d axis =
-        Eigen::Vector3d(noise(rng), noise(rng), noise(rng)).normalized();
+    const Eigen::Vector3d axis = RandomVector<3>(noise, rng).normalized();
     const Eigen::Quaterniond turn(
         Eigen::AngleAxisd(angle_deg * M_PI / 180.0, axis));
     const Eigen::Vector4d& q = *geometry.qvec;
     const Eigen::Quaterniond rotation =
         turn * Eigen::Quaterniond(q(0), q(1), q(2), q(3));
-    const Eigen::Vector3d t =
-        (*geometry.tvec +
-         0.5 * angle_deg * M_PI / 180.0 *
-             Eigen::Vector3d(noise(rng), noise(rng), noise(rng)))
-            .normalized();
+    const Eigen::Vector3d t = (*geometry.tvec + 0.5 * angle_deg * M_PI / 180.0 *
+                                                    RandomVector<3>(noise, rng))
+                                  .normalized();
     Eigen::Matrix3d skew;
     skew << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
     geometry.E = skew * rotation.toRotationMatrix();

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/cloud/local_quadric.h"
 
+#include "ext/core/random.h"
+
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
@@ -64,14 +66,11 @@ TEST(LocalQuadric, VarianceFactorAndHeightVarianceMatchTheNoise) {
     std::vector<Eigen::Vector3d> neighbors, sigmas;
     for (int j = 0; j < 30; ++j) {
       const double u = uniform(rng), v = uniform(rng);
-      const Eigen::Vector3d e(sigma.x() * noise(rng),
-                              sigma.y() * noise(rng),
-                              sigma.z() * noise(rng));
+      const Eigen::Vector3d e = sigma.cwiseProduct(RandomVector<3>(noise, rng));
       neighbors.push_back(q.Point(u, v, q.Height(u, v)) + e);
       sigmas.push_back(sigma);
     }
-    const Eigen::Vector3d e(
-        sigma.x() * noise(rng), sigma.y() * noise(rng), sigma.z() * noise(rng));
+    const Eigen::Vector3d e = sigma.cwiseProduct(RandomVector<3>(noise, rng));
     const Eigen::Vector3d query = q.Point(0, 0, q.Height(0, 0)) + e;
     const QuadricPatch patch = FitQuadricPatch(query, neighbors, sigmas);
     ASSERT_TRUE(patch.valid);
@@ -96,7 +95,8 @@ TEST(LocalQuadric, ASecondBlunderDoesNotCarryThePatch) {
   std::uniform_real_distribution<double> uniform(-0.05, 0.05);
   std::vector<Eigen::Vector3d> neighbors;
   while (neighbors.size() < 23) {
-    const Eigen::Vector3d p(uniform(rng), uniform(rng), 0);
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    p.head<2>() = RandomVector<2>(uniform, rng);
     if (p.norm() < 0.05) neighbors.push_back(p);
   }
   neighbors.emplace_back(0.02, 0.0, 0.185);

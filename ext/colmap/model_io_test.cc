@@ -3,6 +3,7 @@
 
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/core/random.h"
 
 #include <gtest/gtest.h>
 
@@ -35,14 +36,14 @@ Scene SmallScene() {
         Eigen::Vector3d(0.1, -0.2, 3.0 + image_id);
     for (int i = 0; i < 20; ++i) {
       Point2D point;
-      point.xy = Eigen::Vector2d(u(rng), u(rng));
+      point.xy = RandomVector<2>(u, rng);
       image.points2D.push_back(point);
     }
     scene.images.Set(image_id, image);
   }
   for (int i = 0; i < 10; ++i) {
     scene.AddPoint3D(
-        Eigen::Vector3d(u(rng), u(rng), u(rng)) / 100,
+        RandomVector<3>(u, rng) / 100,
         {{5, static_cast<point2D_t>(i)}, {9, static_cast<point2D_t>(i + 3)}});
   }
   scene.UpdateReprojectionErrors();

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/core/alignment.h"
 
+#include "ext/core/random.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
@@ -51,8 +53,7 @@ TEST(Alignment, RobustFitFlagsBlunders) {
   std::vector<Eigen::Vector3d> dst;
   std::normal_distribution<double> noise(0, 0.001);
   for (const auto& p : src) {
-    dst.push_back(TrueTransform() * p +
-                  Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    dst.push_back(TrueTransform() * p + RandomVector<3>(noise, rng));
   }
   for (int i : {3, 11, 17, 25}) dst[i] += Eigen::Vector3d(0.5, -0.3, 0.2);
   const RobustSim3dReport report = EstimateSim3dRobust(src, dst);

@@ -2,6 +2,7 @@
 #include "ext/dense/mpgc.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/random.h"
 #include "ext/dense/plane_scene_testing.h"
 
 #include <gtest/gtest.h>
@@ -31,8 +32,7 @@ TEST(Mpgc, ObjectPointsAgreeWithTheirCovariance) {
     for (int x = 70; x <= 250; x += 15) {
       const Eigen::Vector2d master_xy(x + 0.5, y + 0.5);
       const Eigen::Vector3d truth = *scene.OnPlane(scene.poses[0], master_xy);
-      const Eigen::Vector3d start =
-          truth + Eigen::Vector3d(offset(rng), offset(rng), offset(rng));
+      const Eigen::Vector3d start = truth + RandomVector<3>(offset, rng);
       ++num_points;
       const MpgcResult result =
           MatchMpgc(scene.View(0), master_xy, search, start, options);

@@ -2,6 +2,7 @@
 #include "ext/eval/mesh_distance.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/random.h"
 
 #include <gtest/gtest.h>
 
@@ -71,7 +72,7 @@ TEST(MeshDistance, HierarchyAgreesWithBruteForce) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.5, 1.5);
   std::vector<Eigen::Vector3d> points;
-  for (int i = 0; i < 300; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+  for (int i = 0; i < 300; ++i) points.push_back(RandomVector<3>(u, rng));
   const std::vector<double> fast = distance.Distances(points, 2);
   for (size_t i = 0; i < points.size(); ++i) {
     double best = 1e300;

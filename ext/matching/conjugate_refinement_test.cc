@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/matching/conjugate_refinement.h"
 
+#include "ext/core/random.h"
 #include "ext/synth/texture_patches.h"
 
 #include <gtest/gtest.h>
@@ -50,7 +51,7 @@ Scene MakeScene() {
       scene.keypoints1.push_back(keypoint);
       scene.conjugates.push_back(scene.Map(keypoint));
       scene.keypoints2.push_back(scene.conjugates.back() +
-                                 Eigen::Vector2d(jitter(rng), jitter(rng)));
+                                 RandomVector<2>(jitter, rng));
     }
   }
   return scene;
@@ -70,7 +71,7 @@ PairMatches StartingMatches(const Scene& scene, int count, double error_px) {
     matches.matches(k, 0) = matches.matches(k, 1) = static_cast<uint32_t>(i);
     matches.reference_xy1.push_back(scene.keypoints1[i]);
     matches.refined_xy2.push_back(scene.conjugates[i] +
-                                  Eigen::Vector2d(error(rng), error(rng)));
+                                  RandomVector<2>(error, rng));
     matches.ncc.push_back(0.9f);
     matches.sigma_px.push_back(0.3f);
   }

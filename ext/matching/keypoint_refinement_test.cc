@@ -4,6 +4,7 @@
 #include "ext/colmap/database.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/core/random.h"
 #include "ext/synth/texture_patches.h"
 
 #include <Eigen/Geometry>
@@ -86,7 +87,7 @@ FeatureKeypoints MakeKeypoints(const SyntheticViews& views,
   FeatureKeypoints keypoints(points.size(), 6);
   for (size_t k = 0; k < points.size(); ++k) {
     const Eigen::Vector2d xy =
-        views.ToView(view, points[k]) + Eigen::Vector2d(error(rng), error(rng));
+        views.ToView(view, points[k]) + RandomVector<2>(error, rng);
     const Eigen::Matrix2d frame =
         views.truths[view].shape * 2.0 *
         Eigen::Rotation2Dd(angle(rng)).toRotationMatrix();

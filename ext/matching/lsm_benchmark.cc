@@ -68,8 +68,13 @@ const Scene& GetScene() {
         s.points.push_back(p);
         std::vector<Eigen::Vector2d> approximations;
         for (int i = 0; i < kNumSearches; ++i) {
-          const Eigen::Vector2d error(offset(rng) * (sign(rng) ? 1 : -1),
-                                      offset(rng) * (sign(rng) ? 1 : -1));
+          // y first, then x; each its sign before its size (the order of
+          // draws is fixed: see ext/core/random.h).
+          Eigen::Vector2d error;
+          for (int axis = 1; axis >= 0; --axis) {
+            const double side = sign(rng) ? 1 : -1;
+            error[axis] = offset(rng) * side;
+          }
           approximations.push_back(s.Conjugate(i, p) + 0.7 * error);
         }
         s.approximations.push_back(approximations);

@@ -2,6 +2,7 @@
 #include "ext/matching/relaxation.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/random.h"
 
 #include <gtest/gtest.h>
 
@@ -24,13 +25,14 @@ TEST(Relaxation, ContinuityAndUniquenessKeepTheTrueMatches) {
   std::vector<Eigen::Vector2d> xy1, xy2;
   std::vector<MatchCandidate> candidates;
   for (int i = 0; i < 400; ++i) {
-    xy1.emplace_back(x(rng), y(rng));
+    const double row = y(rng);  // y first: a fixed order of draws
+    xy1.emplace_back(x(rng), row);
     xy2.push_back(L * xy1.back() + shift);
   }
   for (int i = 0; i < 400; ++i) {
     candidates.push_back({i, i, static_cast<float>(ncc(rng))});
     for (int k = 0; k < 3; ++k) {
-      xy2.push_back(xy2[i] + Eigen::Vector2d(offset(rng), offset(rng)));
+      xy2.push_back(xy2[i] + RandomVector<2>(offset, rng));
       candidates.push_back(
           {i, static_cast<int>(xy2.size()) - 1, static_cast<float>(ncc(rng))});
     }

@@ -4,6 +4,7 @@
 #include "ext/colmap/table_disparity.h"
 #include "ext/colmap/table_relative.h"
 #include "ext/core/errors.h"
+#include "ext/core/random.h"
 #include "ext/orientation/disparity.h"
 #include "ext/synth/synthetic_camera.h"
 
@@ -162,8 +163,8 @@ Samples MakeSamples(const Pair& pair,
   Samples samples;
   int attempts = 0;
   while (samples.points.size() < n && ++attempts < 100 * n) {
-    const Eigen::Vector2d pixel1(unit(rng) * pair.camera.width,
-                                 unit(rng) * pair.camera.height);
+    const Eigen::Vector2d pixel1 = RandomVector<2>(unit, rng).cwiseProduct(
+        Eigen::Vector2d(pair.camera.width, pair.camera.height));
     Eigen::Vector2d pixel2;
     Eigen::Vector3d X;
     if (!TruePair(pair, pixel1, &pixel2, &X) || !where(pixel1, X)) continue;
@@ -171,15 +172,16 @@ Samples MakeSamples(const Pair& pair,
     if (blunder) {
       // The same ray of image 1, 0.6 to 3 m nearer or farther.
       const Eigen::Vector3d c1 = pair.cam1_from_world.Center();
-      const double shift = (unit(rng) < 0.5 ? -1 : 1) * (0.6 + 2.4 * unit(rng));
+      const double size = 0.6 + 2.4 * unit(rng);
+      const double shift = (unit(rng) < 0.5 ? -1 : 1) * size;
       const Eigen::Vector3d Y = X + shift * (X - c1).normalized();
       if (!pair.camera.ImgFromCam(pair.cam2_from_world * Y, &pixel2) ||
           !Inside(pair.camera, pixel2)) {
         continue;
       }
     }
-    const Eigen::Vector2d p1 = pixel1 + Eigen::Vector2d(noise(rng), noise(rng));
-    const Eigen::Vector2d p2 = pixel2 + Eigen::Vector2d(noise(rng), noise(rng));
+    const Eigen::Vector2d p1 = pixel1 + RandomVector<2>(noise, rng);
+    const Eigen::Vector2d p2 = pixel2 + RandomVector<2>(noise, rng);
     Eigen::Vector3d u1, u2;
     if (!pair.vectors.FromPixel(p1, &u1) || !pair.vectors.FromPixel(p2, &u2)) {
       continue;
@@ -229,8 +231,8 @@ HeldOut CheckHeldOut(const Pair& pair,
   std::vector<double> bands, ranges;
   for (int attempt = 0; attempt < 50 * n && result.num_supported < n;
        ++attempt) {
-    const Eigen::Vector2d pixel(unit(rng) * pair.camera.width,
-                                unit(rng) * pair.camera.height);
+    const Eigen::Vector2d pixel = RandomVector<2>(unit, rng).cwiseProduct(
+        Eigen::Vector2d(pair.camera.width, pair.camera.height));
     Eigen::Vector2d other;
     Eigen::Vector3d X;
     if (!TruePair(pair, pixel, &other, &X) || !where(pixel, X)) continue;

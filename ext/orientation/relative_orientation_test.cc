@@ -2,6 +2,7 @@
 #include "ext/orientation/relative_orientation.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/random.h"
 #include "ext/synth/synthetic_camera.h"
 
 #include <gtest/gtest.h>
@@ -65,8 +66,10 @@ Synthetic MakePair(int n,
   while (pair.points.size() < n) {
     // A point anywhere in image 1, 8 to 12 m away: an object that fills
     // the frame, with relief.
-    const Eigen::Vector3d ray((unit(rng) * kWidth - kWidth / 2) / kFocal,
-                              (unit(rng) * kHeight - kHeight / 2) / kFocal,
+    const Eigen::Vector2d pixel = RandomVector<2>(unit, rng).cwiseProduct(
+        Eigen::Vector2d(kWidth, kHeight));
+    const Eigen::Vector3d ray((pixel.x() - kWidth / 2) / kFocal,
+                              (pixel.y() - kHeight / 2) / kFocal,
                               1.0);
     const Eigen::Vector3d X = world_from_cam1 * (ray * (8 + 4 * unit(rng)));
     Eigen::Vector2d x1 = project(cam1_from_world, X);
@@ -75,10 +78,13 @@ Synthetic MakePair(int n,
       return x.x() > 0 && x.y() > 0 && x.x() < kWidth && x.y() < kHeight;
     };
     if (!inside(x1) || !inside(x2)) continue;
-    x1 += Eigen::Vector2d(noise(rng), noise(rng));
-    x2 += Eigen::Vector2d(noise(rng), noise(rng));
+    x1 += RandomVector<2>(noise, rng);
+    x2 += RandomVector<2>(noise, rng);
     const bool blunder = unit(rng) < blunder_share;
-    if (blunder) x2 = Eigen::Vector2d(unit(rng) * kWidth, unit(rng) * kHeight);
+    if (blunder) {
+      x2 = RandomVector<2>(unit, rng).cwiseProduct(
+          Eigen::Vector2d(kWidth, kHeight));
+    }
     pair.points.u1.push_back(ImageVector(x1));
     pair.points.u2.push_back(ImageVector(x2));
     pair.points.pixel1.push_back(x1);
@@ -160,7 +166,7 @@ TEST(RelativeOrientation, PointsAreWeightedByTheirStandardDeviations) {
     double sigma = 0.05;
     if (i >= kPrecise) {
       sigma = 1.0;
-      const Eigen::Vector2d shift(noise(rng), noise(rng));
+      const Eigen::Vector2d shift = RandomVector<2>(noise, rng);
       pair.points.pixel2[i] += shift;
       pair.points.u2[i] = ImageVector(pair.points.pixel2[i]);
     }

@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
+#include <cstdint>
 
 namespace bayon {
 namespace {
@@ -65,11 +66,13 @@ TEST(Html, JpegDataUriScalesDown) {
   ASSERT_EQ(uri.compare(0, prefix.size(), prefix), 0);
   // Decode the base64 back and the JPEG with it.
   std::string bytes;
-  int bits = 0, value = 0;
+  // Unsigned: the bits shifted out at the top are meant to be lost.
+  int bits = 0;
+  uint32_t value = 0;
   for (size_t i = prefix.size(); i < uri.size() && uri[i] != '='; ++i) {
     const std::string alphabet =
         "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    value = value << 6 | static_cast<int>(alphabet.find(uri[i]));
+    value = value << 6 | static_cast<uint32_t>(alphabet.find(uri[i]));
     bits += 6;
     if (bits >= 8) {
       bits -= 8;

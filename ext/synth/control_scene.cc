@@ -2,6 +2,7 @@
 #include "ext/synth/control_scene.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/random.h"
 
 #include <cmath>
 #include <cstdio>
@@ -119,7 +120,7 @@ SyntheticControl SynthesizeControl(const SyntheticTruth& truth,
       ImageMeasurement measurement;
       measurement.point_name = point.name;
       measurement.image_name = image.name;
-      measurement.xy = pixel + Eigen::Vector2d(noise(rng), noise(rng));
+      measurement.xy = pixel + RandomVector<2>(noise, rng);
       measurement.sigma_px = noise_px > 0 ? noise_px : 0;
       control.measurements.push_back(measurement);
     }

@@ -2,6 +2,7 @@
 #include "ext/synth/points_scene.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/random.h"
 
 #include <nlohmann/json.hpp>
 
@@ -96,7 +97,7 @@ SyntheticTruth SynthesizePointsScene(const PointsSceneOptions& options) {
   std::normal_distribution<double> noise(0, options.keypoint_noise_px);
   for (auto& [image_id, image] : truth.noisy_scene.images) {
     for (Point2D& point : image.points2D) {
-      point.xy += Eigen::Vector2d(noise(rng), noise(rng));
+      point.xy += RandomVector<2>(noise, rng);
     }
   }
   truth.noisy_scene.UpdateReprojectionErrors();

@@ -10,6 +10,7 @@
 #include "ext/core/camera_conversion.h"
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
+#include "ext/core/random.h"
 #include "ext/image/image_io.h"
 
 #include <nlohmann/json.hpp>
@@ -214,15 +215,14 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
     if (target.on_bar) continue;  // the bar gives scale and vertical only
     ControlPoint user = point;
     user.sigma.setConstant(options.control_sigma_m);
-    user.xyz += options.control_sigma_m *
-                Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+    user.xyz += options.control_sigma_m * RandomVector<3>(gauss, rng);
     user.type = ++number % 3 == 0 ? ControlPointType::kCheck
                                   : ControlPointType::kControl;
     user_points.push_back(user);
   }
   std::vector<ImageMeasurement> user_observations = observations;
   for (ImageMeasurement& m : user_observations) {
-    m.xy += options.control_sigma_px * Eigen::Vector2d(gauss(rng), gauss(rng));
+    m.xy += options.control_sigma_px * RandomVector<2>(gauss, rng);
     m.sigma_px = options.control_sigma_px;
   }
   DistanceObservation bar;
