@@ -38,6 +38,11 @@ function(bayon_add_test)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 600)
   endif()
+  if(BAYON_SANITIZE)
+    # Instrumented pixel loops run 10 to 20 times slower (the temple pipeline
+    # takes about 15 minutes instead of 45 s).
+    math(EXPR ARG_TIMEOUT "${ARG_TIMEOUT} * 4")
+  endif()
   set(labels unit)
   if(ARG_LABELS)
     set(labels ${ARG_LABELS})

@@ -156,6 +156,9 @@ SqliteConnection::SqliteConnection(const std::string& path, Mode mode)
     flags |= SQLITE_OPEN_READWRITE;
     if (mode == Mode::kCreate) flags |= SQLITE_OPEN_CREATE;
   }
+  // Read before opening: a bad value throws, and a constructor that throws
+  // runs no destructor to close the connection.
+  const int busy_timeout_ms = BusyTimeoutMs();
   const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
     const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
@@ -165,7 +168,7 @@ SqliteConnection::SqliteConnection(const std::string& path, Mode mode)
   }
   // Wait for a concurrent writer (another bayon or colmap) instead of failing
   // at once; COLMAP's own connections do not wait, so be patient here.
-  sqlite3_busy_timeout(db_, BusyTimeoutMs());
+  sqlite3_busy_timeout(db_, busy_timeout_ms);
   sqlite3_extended_result_codes(db_, 1);
   // Reading the schema is the first real access: a file that is not SQLite
   // fails here with "file is not a database".
