@@ -10,6 +10,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace bayon {
 namespace {
@@ -145,7 +148,38 @@ TEST(MeshIo, PlyObjOffRoundTrip) {
   EXPECT_THROW(WriteMesh(mesh, dir + "/mesh.stl"), InputError);
   WriteFileAtomically(dir + "/broken.off", "OFF\n3 1\n0 0 0\n");
   EXPECT_THROW(ReadMesh(dir + "/broken.off"), InputError);
+  // Found by fuzzing: OpenMesh reserved gigabytes for this header.
+  WriteFileAtomically(dir + "/tab.off", "OFF\v4 2 0\n0 0 0\n1 0 0\n");
+  EXPECT_THROW(ReadMesh(dir + "/tab.off"), InputError);
   EXPECT_FALSE(IsMeshFormatSupported("a.xyz"));
+}
+
+// OpenMesh's OBJ reader aborts on a face without vertex indices (found by
+// fuzzing): such files, and faces naming vertices that are not there, are
+// refused first; negative (relative) indices and v/vt/vn corners are read.
+TEST(MeshIo, ObjFacesAreCheckedBeforeOpenMeshReadsThem) {
+  const std::string dir = ::testing::TempDir() + "/bayon_mesh_obj";
+  std::filesystem::create_directories(dir);
+  const std::string vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+  const std::vector<std::pair<std::string, bool>> faces = {
+      {"f 1 2 3\n", true},
+      {"f -3/1 -2/1 -1/1\n", true},
+      {"f 1//1 2//1 3//1\n", true},
+      {"f /1 /1 /1\n", false},
+      {"f 1 2 4\n", false},
+      {"f 0 1 2\n", false},
+      {"f 1 2\n", false},
+      {"f 1x 2 3\n", false},
+  };
+  for (const auto& [face, good] : faces) {
+    const std::string path = dir + "/mesh.obj";
+    WriteFileAtomically(path, vertices + face);
+    if (good) {
+      EXPECT_EQ(ReadMesh(path).NumFaces(), 1u) << face;
+    } else {
+      EXPECT_THROW(ReadMesh(path), InputError) << face;
+    }
+  }
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -65,6 +66,15 @@ void CheckOffHeader(const std::string& path) {
       break;
     }
   }
+  // OpenMesh parses the header its own way; a control character in it (a
+  // vertical tab after OFF) made it reserve for counts it never read.
+  const std::string header = keyword + "\n" + line;
+  if (std::any_of(header.begin(), header.end(), [](char c) {
+        return std::iscntrl(static_cast<unsigned char>(c)) && c != '\t' &&
+               c != '\r' && c != '\n';
+      })) {
+    ThrowInputError(path, ": a control character in the OFF header");
+  }
   const long long file_size = static_cast<long long>(fs::file_size(path));
   if (num_vertices < 0 || num_faces < 0 || num_vertices > file_size / 6 ||
       num_faces > file_size / 8 ||
@@ -77,6 +87,57 @@ void CheckOffHeader(const std::string& path) {
                     ") are missing or more than its ",
                     file_size,
                     " bytes can hold");
+  }
+}
+
+// OpenMesh's OBJ reader asserts (and so aborts the program) on a face that
+// names no vertex, such as "f /1 /2 /3", and takes indices beyond the
+// vertices read so far on trust. Every corner must start with its vertex
+// index, counted from 1 or (negative) back from the last vertex, and every
+// face must have three corners.
+void CheckObjFaces(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  long long num_vertices = 0;
+  for (long long number = 1; std::getline(in, line); ++number) {
+    std::istringstream tokens(line);
+    std::string keyword;
+    if (!(tokens >> keyword)) continue;
+    if (keyword == "v") {
+      ++num_vertices;
+      continue;
+    }
+    if (keyword != "f") continue;
+    int corners = 0;
+    for (std::string corner; tokens >> corner; ++corners) {
+      const std::string index = corner.substr(0, corner.find('/'));
+      size_t used = 0;
+      long long value = 0;
+      try {
+        value = std::stoll(index, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != index.size() || value == 0 ||
+          std::llabs(value) > num_vertices) {
+        ThrowInputError(path,
+                        ":",
+                        number,
+                        ": face corner '",
+                        corner,
+                        "' does not name one of the ",
+                        num_vertices,
+                        " vertices before it");
+      }
+    }
+    if (corners < 3) {
+      ThrowInputError(path,
+                      ":",
+                      number,
+                      ": a face with ",
+                      corners,
+                      " corners (at least 3)");
+    }
   }
 }
 
@@ -173,6 +234,7 @@ TriangleMesh ReadMesh(const std::string& path) {
   if (ext == ".ply") return ReadMeshPly(path);
   CheckFileExists(path, "mesh");
   if (ext == ".off") CheckOffHeader(path);
+  if (ext == ".obj") CheckObjFaces(path);
   OmMesh om;
   om.request_vertex_normals();
   om.request_vertex_colors();
