@@ -155,8 +155,9 @@ TEST(MeshIo, PlyObjOffRoundTrip) {
 }
 
 // OpenMesh's OBJ reader aborts on a face without vertex indices (found by
-// fuzzing): such files, and faces naming vertices that are not there, are
-// refused first; negative (relative) indices and v/vt/vn corners are read.
+// fuzzing): such files, faces naming vertices that are not there and
+// colours beyond 0..1 (undefined in its conversion) are refused first; negative
+// (relative) indices and v/vt/vn corners are read.
 TEST(MeshIo, ObjFacesAreCheckedBeforeOpenMeshReadsThem) {
   const std::string dir = ::testing::TempDir() + "/bayon_mesh_obj";
   std::filesystem::create_directories(dir);
@@ -170,6 +171,8 @@ TEST(MeshIo, ObjFacesAreCheckedBeforeOpenMeshReadsThem) {
       {"f 0 1 2\n", false},
       {"f 1 2\n", false},
       {"f 1x 2 3\n", false},
+      {"v 0 0 1 0.5 1 0\nf 1 2 4\n", true},
+      {"v 0 0 1 52 21.5 13\nf 1 2 4\n", false},
   };
   for (const auto& [face, good] : faces) {
     const std::string path = dir + "/mesh.obj";

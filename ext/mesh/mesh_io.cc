@@ -94,8 +94,8 @@ void CheckOffHeader(const std::string& path) {
 // names no vertex, such as "f /1 /2 /3", and takes indices beyond the
 // vertices read so far on trust. Every corner must start with its vertex
 // index, counted from 1 or (negative) back from the last vertex, and every
-// face must have three corners.
-void CheckObjFaces(const std::string& path) {
+// face must have three corners; vertex colours must be fractions.
+void CheckObjFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
   long long num_vertices = 0;
@@ -105,6 +105,21 @@ void CheckObjFaces(const std::string& path) {
     if (!(tokens >> keyword)) continue;
     if (keyword == "v") {
       ++num_vertices;
+      // x y z r g b: OpenMesh scales the colour by 255 into a byte, which
+      // for a value outside 0..1 (a file written with 0..255) is undefined.
+      double values[6];
+      int n = 0;
+      while (n < 6 && tokens >> values[n]) ++n;
+      for (int i = 3; n == 6 && i < 6; ++i) {
+        if (!(values[i] >= 0 && values[i] <= 1)) {
+          ThrowInputError(path,
+                          ":",
+                          number,
+                          ": vertex colour ",
+                          values[i],
+                          " outside 0..1");
+        }
+      }
       continue;
     }
     if (keyword != "f") continue;
@@ -234,7 +249,7 @@ TriangleMesh ReadMesh(const std::string& path) {
   if (ext == ".ply") return ReadMeshPly(path);
   CheckFileExists(path, "mesh");
   if (ext == ".off") CheckOffHeader(path);
-  if (ext == ".obj") CheckObjFaces(path);
+  if (ext == ".obj") CheckObjFile(path);
   OmMesh om;
   om.request_vertex_normals();
   om.request_vertex_colors();
