@@ -151,6 +151,15 @@ TEST(MeshIo, PlyObjOffRoundTrip) {
   // Found by fuzzing: OpenMesh reserved gigabytes for this header.
   WriteFileAtomically(dir + "/tab.off", "OFF\v4 2 0\n0 0 0\n1 0 0\n");
   EXPECT_THROW(ReadMesh(dir + "/tab.off"), InputError);
+  WriteFileAtomically(dir + "/glued.off", "OFF0=3\n");
+  EXPECT_THROW(ReadMesh(dir + "/glued.off"), InputError);
+  // Counts on the keyword's line are refused (OpenMesh would read the first
+  // vertex as the counts); a comment after the keyword is fine.
+  const std::string triangle = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  WriteFileAtomically(dir + "/one_line.off", "OFF 3 1 0\n" + triangle);
+  EXPECT_THROW(ReadMesh(dir + "/one_line.off"), InputError);
+  WriteFileAtomically(dir + "/comment.off", "OFF # a\n3 1 0\n" + triangle);
+  EXPECT_EQ(ReadMesh(dir + "/comment.off").NumFaces(), 1u);
   EXPECT_FALSE(IsMeshFormatSupported("a.xyz"));
 }
 

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -53,38 +54,61 @@ void CheckOffHeader(const std::string& path) {
     ThrowInputError(path,
                     ": binary OFF is not supported (use ASCII OFF or PLY)");
   }
-  // The counts follow the keyword on its line or on the next line.
-  std::istringstream rest(keyword.substr(off + 3));
-  long long num_vertices = -1;
-  long long num_faces = -1;
-  if (!(rest >> num_vertices >> num_faces)) {
+  // The counts (vertices, faces, edges) have the next line to themselves,
+  // which is where OpenMesh reads them: "OFF0=3" made it reserve gigabytes
+  // for counts it never read.
+  std::string counts = keyword.substr(off + 3);
+  if (counts.substr(0, counts.find('#')).find_first_not_of(" \t\r") ==
+      std::string::npos) {
+    counts.clear();
     while (std::getline(in, line)) {
       const size_t start = line.find_first_not_of(" \t\r");
       if (start == std::string::npos || line[start] == '#') continue;
-      std::istringstream counts(line);
-      counts >> num_vertices >> num_faces;
+      counts = line;
       break;
     }
+  } else {
+    // OpenMesh would skip them and take the first vertex for the counts.
+    ThrowInputError(path,
+                    ": the OFF counts must be on their own line after the "
+                    "keyword line");
   }
-  // OpenMesh parses the header its own way; a control character in it (a
-  // vertical tab after OFF) made it reserve for counts it never read.
-  const std::string header = keyword + "\n" + line;
+  // A control character (a vertical tab after OFF) is refused too.
+  const std::string header = keyword + "\n" + counts;
   if (std::any_of(header.begin(), header.end(), [](char c) {
         return std::iscntrl(static_cast<unsigned char>(c)) && c != '\t' &&
                c != '\r' && c != '\n';
       })) {
     ThrowInputError(path, ": a control character in the OFF header");
   }
+  // Two or three whole numbers and nothing else (a comment aside).
+  std::vector<long long> numbers;
+  std::istringstream fields(counts.substr(0, counts.find('#')));
+  for (std::string field; fields >> field;) {
+    if (field.size() > 15 ||
+        field.find_first_not_of("0123456789") != std::string::npos) {
+      numbers.clear();
+      break;
+    }
+    numbers.push_back(std::stoll(field));
+  }
+  if (numbers.size() < 2 || numbers.size() > 3) {
+    ThrowInputError(path,
+                    ": the OFF header's counts '",
+                    counts,
+                    "' are not two or three whole numbers");
+  }
+  const long long num_vertices = numbers[0];
+  const long long num_faces = numbers[1];
   const long long file_size = static_cast<long long>(fs::file_size(path));
-  if (num_vertices < 0 || num_faces < 0 || num_vertices > file_size / 6 ||
-      num_faces > file_size / 8 ||
+  if (num_vertices > file_size / 6 || num_faces > file_size / 8 ||
       num_vertices * 6 + num_faces * 8 > file_size) {
     ThrowInputError(path,
                     ": the OFF header's vertex and face counts (",
                     num_vertices,
                     ", ",
                     num_faces,
-                    ") are missing or more than its ",
+                    ") are more than its ",
                     file_size,
                     " bytes can hold");
   }
