@@ -655,16 +655,18 @@ TexturedModel ReadVrml(const std::string& path) {
   auto polygons = [&](const std::vector<double>& indices, size_t count) {
     std::vector<std::vector<int>> result(1);
     for (double value : indices) {
-      const int index = static_cast<int>(value);
-      if (index == -1) {
+      if (value == -1) {
         result.emplace_back();
         continue;
       }
-      if (value != index || index < 0 || size_t(index) >= count) {
+      // Checked as a double: converting one beyond int's range first is
+      // undefined (found by fuzzing).
+      if (!(value >= 0 && value < static_cast<double>(count)) ||
+          value != std::floor(value)) {
         ThrowInputError(
             path, ": index ", value, " out of range (", count, " records)");
       }
-      result.back().push_back(index);
+      result.back().push_back(static_cast<int>(value));
     }
     if (result.back().empty()) result.pop_back();
     return result;
