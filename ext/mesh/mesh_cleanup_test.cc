@@ -153,11 +153,24 @@ TEST(MeshIo, PlyObjOffRoundTrip) {
   EXPECT_THROW(ReadMesh(dir + "/tab.off"), InputError);
   WriteFileAtomically(dir + "/glued.off", "OFF0=3\n");
   EXPECT_THROW(ReadMesh(dir + "/glued.off"), InputError);
-  // Counts on the keyword's line are refused (OpenMesh would read the first
-  // vertex as the counts); a comment after the keyword is fine.
+  // Counts on the keyword's line, comments, a quad (two triangles), colours
+  // as fractions or bytes; a face of 10^30 corners is refused.
   const std::string triangle = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   WriteFileAtomically(dir + "/one_line.off", "OFF 3 1 0\n" + triangle);
-  EXPECT_THROW(ReadMesh(dir + "/one_line.off"), InputError);
+  EXPECT_EQ(ReadMesh(dir + "/one_line.off").NumFaces(), 1u);
+  WriteFileAtomically(dir + "/quad.off",
+                      "COFF\n4 1 0\n0 0 0 1.0 0 0\n1 0 0 0 1 0\n"
+                      "1 1 0 0 0 255\n0 1 0 0 0 128 255\n4 0 1 2 3\n");
+  const TriangleMesh quad = ReadMesh(dir + "/quad.off");
+  ASSERT_EQ(quad.NumFaces(), 2u);
+  ASSERT_EQ(quad.vertices.colors.size(), 4u);
+  EXPECT_EQ(quad.vertices.colors[0].x(), 255);
+  EXPECT_EQ(quad.vertices.colors[1].y(), 1);  // an integer: a byte
+  EXPECT_EQ(quad.vertices.colors[3].z(), 128);
+  WriteFileAtomically(dir + "/valence.off",
+                      "OFF\n3 1 0\n" + triangle.substr(0, 18) +
+                          "1000000000000000000000000000000 0 1 2\n");
+  EXPECT_THROW(ReadMesh(dir + "/valence.off"), InputError);
   WriteFileAtomically(dir + "/comment.off", "OFF # a\n3 1 0\n" + triangle);
   EXPECT_EQ(ReadMesh(dir + "/comment.off").NumFaces(), 1u);
   EXPECT_FALSE(IsMeshFormatSupported("a.xyz"));

@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -30,76 +32,88 @@ std::string LowerExtension(const std::string& path) {
   return ext;
 }
 
-// OpenMesh reserves memory for the counts in an OFF header before it reads a
-// vertex, so a damaged or forged header (a billion vertices in 50 bytes)
-// would exhaust memory: the counts are checked against the file's size
-// first. Every vertex has three numbers and every face at least four, each
-// followed by a separator.
-void CheckOffHeader(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string line;
-  std::string keyword;
-  while (std::getline(in, line)) {
-    const size_t start = line.find_first_not_of(" \t\r");
-    if (start == std::string::npos || line[start] == '#') continue;
-    keyword = line.substr(start);
-    break;
+// A whole token as a number: false for "1x", "", "nan", "inf".
+bool ParseFinite(const std::string& token, double* value) {
+  char* end = nullptr;
+  *value = std::strtod(token.c_str(), &end);
+  return !token.empty() && *end == '\0' && std::isfinite(*value);
+}
+
+bool ParseCount(const std::string& token, long long* value) {
+  if (token.empty() || token.size() > 15 ||
+      token.find_first_not_of("0123456789") != std::string::npos) {
+    return false;
   }
-  const size_t off = keyword.find("OFF");
-  const bool prefix_ok =
-      off != std::string::npos &&
-      keyword.find_first_not_of("STCN4n") >= off;  // [ST][C][N][4][n]OFF
-  if (!prefix_ok) ThrowInputError(path, ": not an OFF mesh (no OFF header)");
-  if (keyword.find("BINARY") != std::string::npos) {
+  *value = std::stoll(token);
+  return true;
+}
+
+// ASCII OFF, read by bayon rather than OpenMesh, whose reader trusts the
+// file: fuzzing made it reserve gigabytes for a forged header's counts, read
+// the first vertex as the counts when they stood on the keyword's line, and
+// push corners for a face of 10^30 corners until memory ran out. The keyword
+// [ST][C][N]OFF says what a vertex line holds after x y z: a normal (N), a
+// colour (C: 3 or 4 numbers, in 0..1 or 0..255), texture coordinates (ST,
+// skipped). A face line is "n i1 .. in" and an optional colour (skipped);
+// polygons are cut into fans. 4OFF, nOFF and binary OFF are refused.
+TriangleMesh ReadMeshOff(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) ThrowInputError(path, ": cannot open the mesh");
+  long long number = 0;
+  std::vector<std::string> tokens;
+  // The next line with content, comments removed, split into tokens.
+  auto next_record = [&]() {
+    tokens.clear();
+    for (std::string line; std::getline(in, line);) {
+      ++number;
+      std::istringstream fields(line.substr(0, line.find('#')));
+      for (std::string token; fields >> token;) tokens.push_back(token);
+      if (!tokens.empty()) return true;
+    }
+    return false;
+  };
+  if (!next_record()) ThrowInputError(path, ": empty, no OFF header");
+  const std::string keyword = tokens[0];
+  const size_t off = keyword.size() >= 3 ? keyword.size() - 3 : 0;
+  if (keyword.compare(off, std::string::npos, "OFF") != 0) {
+    ThrowInputError(path, ": not an OFF mesh (no OFF header)");
+  }
+  std::string prefix = keyword.substr(0, off);
+  const bool has_texture = prefix.rfind("ST", 0) == 0;
+  if (has_texture) prefix.erase(0, 2);
+  const bool has_color = !prefix.empty() && prefix[0] == 'C';
+  if (has_color) prefix.erase(0, 1);
+  const bool has_normal = !prefix.empty() && prefix[0] == 'N';
+  if (has_normal) prefix.erase(0, 1);
+  if (!prefix.empty()) {
+    ThrowInputError(
+        path, ": ", keyword, " is not supported (ASCII [ST][C][N]OFF in 3D)");
+  }
+  if (tokens.size() > 1 && tokens[1] == "BINARY") {
     ThrowInputError(path,
                     ": binary OFF is not supported (use ASCII OFF or PLY)");
   }
-  // The counts (vertices, faces, edges) have the next line to themselves,
-  // which is where OpenMesh reads them: "OFF0=3" made it reserve gigabytes
-  // for counts it never read.
-  std::string counts = keyword.substr(off + 3);
-  if (counts.substr(0, counts.find('#')).find_first_not_of(" \t\r") ==
-      std::string::npos) {
-    counts.clear();
-    while (std::getline(in, line)) {
-      const size_t start = line.find_first_not_of(" \t\r");
-      if (start == std::string::npos || line[start] == '#') continue;
-      counts = line;
-      break;
+  // The counts: on the keyword's line or the next.
+  size_t first = 1;
+  if (tokens.size() == 1) {
+    if (!next_record()) {
+      ThrowInputError(path, ": no vertex and face counts after ", keyword);
     }
-  } else {
-    // OpenMesh would skip them and take the first vertex for the counts.
-    ThrowInputError(path,
-                    ": the OFF counts must be on their own line after the "
-                    "keyword line");
+    first = 0;
   }
-  // A control character (a vertical tab after OFF) is refused too.
-  const std::string header = keyword + "\n" + counts;
-  if (std::any_of(header.begin(), header.end(), [](char c) {
-        return std::iscntrl(static_cast<unsigned char>(c)) && c != '\t' &&
-               c != '\r' && c != '\n';
-      })) {
-    ThrowInputError(path, ": a control character in the OFF header");
+  long long num_vertices = 0;
+  long long num_faces = 0;
+  long long num_edges = 0;
+  const size_t num_counts = tokens.size() - first;
+  if (num_counts < 2 || num_counts > 3 ||
+      !ParseCount(tokens[first], &num_vertices) ||
+      !ParseCount(tokens[first + 1], &num_faces) ||
+      (num_counts == 3 && !ParseCount(tokens[first + 2], &num_edges))) {
+    ThrowInputError(
+        path, ":", number, ": the counts must be two or three whole numbers");
   }
-  // Two or three whole numbers and nothing else (a comment aside).
-  std::vector<long long> numbers;
-  std::istringstream fields(counts.substr(0, counts.find('#')));
-  for (std::string field; fields >> field;) {
-    if (field.size() > 15 ||
-        field.find_first_not_of("0123456789") != std::string::npos) {
-      numbers.clear();
-      break;
-    }
-    numbers.push_back(std::stoll(field));
-  }
-  if (numbers.size() < 2 || numbers.size() > 3) {
-    ThrowInputError(path,
-                    ": the OFF header's counts '",
-                    counts,
-                    "' are not two or three whole numbers");
-  }
-  const long long num_vertices = numbers[0];
-  const long long num_faces = numbers[1];
+  // Every vertex has three numbers and every face at least four, each
+  // followed by a separator: counts beyond that are forged or damaged.
   const long long file_size = static_cast<long long>(fs::file_size(path));
   if (num_vertices > file_size / 6 || num_faces > file_size / 8 ||
       num_vertices * 6 + num_faces * 8 > file_size) {
@@ -112,6 +126,97 @@ void CheckOffHeader(const std::string& path) {
                     file_size,
                     " bytes can hold");
   }
+  TriangleMesh mesh;
+  PointCloud& vertices = mesh.vertices;
+  const size_t fixed = 3 + (has_normal ? 3 : 0) + (has_texture ? 2 : 0);
+  for (long long v = 0; v < num_vertices; ++v) {
+    if (!next_record()) {
+      ThrowInputError(
+          path, ": the file ends after ", v, " of ", num_vertices, " vertices");
+    }
+    const size_t color_size = tokens.size() - std::min(tokens.size(), fixed);
+    if (tokens.size() < fixed ||
+        (has_color ? color_size != 3 && color_size != 4 : color_size != 0)) {
+      ThrowInputError(path,
+                      ":",
+                      number,
+                      ": ",
+                      tokens.size(),
+                      " numbers for a vertex of ",
+                      keyword);
+    }
+    std::vector<double> values(tokens.size());
+    for (size_t k = 0; k < tokens.size(); ++k) {
+      if (!ParseFinite(tokens[k], &values[k])) {
+        ThrowInputError(
+            path, ":", number, ": '", tokens[k], "' is not a number");
+      }
+    }
+    vertices.positions.emplace_back(values[0], values[1], values[2]);
+    if (has_normal) {
+      vertices.normals.emplace_back(values[3], values[4], values[5]);
+    }
+    if (has_color) {
+      const size_t at = 3 + (has_normal ? 3 : 0);
+      const double* rgb = &values[at];
+      // Geomview's rule: integers are bytes, reals are fractions.
+      bool fractions = false;
+      for (size_t k = at; k < at + 3; ++k) {
+        fractions |= tokens[k].find_first_of(".eE") != std::string::npos;
+      }
+      Eigen::Matrix<uint8_t, 3, 1> color;
+      for (int k = 0; k < 3; ++k) {
+        const double level = fractions ? rgb[k] * 255 : rgb[k];
+        if (!(level >= 0 && level <= 255)) {
+          ThrowInputError(path,
+                          ":",
+                          number,
+                          ": colour ",
+                          rgb[k],
+                          " outside 0..1 and 0..255");
+        }
+        color[k] = static_cast<uint8_t>(std::lround(level));
+      }
+      vertices.colors.push_back(color);
+    }
+  }
+  for (long long f = 0; f < num_faces; ++f) {
+    if (!next_record()) {
+      ThrowInputError(
+          path, ": the file ends after ", f, " of ", num_faces, " faces");
+    }
+    long long corners = 0;
+    if (!ParseCount(tokens[0], &corners) || corners < 3 ||
+        static_cast<size_t>(corners) >= tokens.size() ||
+        tokens.size() - 1 - corners > 4) {
+      ThrowInputError(path,
+                      ":",
+                      number,
+                      ": a face is its corner count (3 or more), the "
+                      "corners and at most a colour");
+    }
+    std::vector<int> face(corners);
+    for (long long k = 0; k < corners; ++k) {
+      long long index = 0;
+      if (!ParseCount(tokens[k + 1], &index) || index >= num_vertices) {
+        ThrowInputError(path,
+                        ":",
+                        number,
+                        ": corner '",
+                        tokens[k + 1],
+                        "' is not one of the ",
+                        num_vertices,
+                        " vertices");
+      }
+      face[k] = static_cast<int>(index);
+    }
+    for (long long k = 1; k + 1 < corners; ++k) {
+      mesh.faces.emplace_back(face[0], face[k], face[k + 1]);
+    }
+  }
+  if (mesh.faces.empty()) ThrowInputError(path, ": the mesh has no faces");
+  mesh.Check(path);
+  return mesh;
 }
 
 // OpenMesh's OBJ reader asserts (and so aborts the program) on a face that
@@ -272,7 +377,7 @@ TriangleMesh ReadMesh(const std::string& path) {
   }
   if (ext == ".ply") return ReadMeshPly(path);
   CheckFileExists(path, "mesh");
-  if (ext == ".off") CheckOffHeader(path);
+  if (ext == ".off") return ReadMeshOff(path);
   if (ext == ".obj") CheckObjFile(path);
   OmMesh om;
   om.request_vertex_normals();
