@@ -157,7 +157,15 @@ TEST(Concurrency, BayonMatchBesideColmapFeatureExtractor) {
                                                           "1"});
   const testing::CommandResult colmap_result = colmap.get();
   EXPECT_EQ(colmap_result.exit_code, 0) << colmap_result.output;
-  EXPECT_EQ(match.exit_code, 0) << match.output;
+  if (match.exit_code != 0) {
+    // COLMAP registered one of its images (from a folder bayon was not
+    // given) before bayon read the image list: bayon stops with one line,
+    // which is also a right answer. Which comes first is the schedulers'
+    // choice (the sanitizer build starts more slowly).
+    EXPECT_EQ(match.exit_code, 2) << match.output;
+    EXPECT_NE(match.LastLine().find("missing on disk"), std::string::npos)
+        << match.output;
+  }
   EXPECT_EQ(IntegrityCheck(dir + "/database.db"), "ok");
   EXPECT_EQ(KeypointCounts(dir + "/database.db").size(), 12u);
   ExpectMatchesReferToKeypoints(dir + "/database.db");
