@@ -174,6 +174,10 @@ int RunDense(int argc, char** argv) {
   app.add_option("--surface_radius_cells",
                  options.surface_radius_cells,
                  "Neighbours of the off-surface test: cells around");
+  app.add_option("--max_growth_passes",
+                 options.max_growth_passes,
+                 "Region growing: passes of MPGC from the surface of the "
+                 "accepted neighbours (0 = off)");
   app.add_option("--num_threads", options.num_threads, "-1 = all cores");
   app.add_option("--overwrite", overwrite, "Replace existing output files");
   app.add_option(

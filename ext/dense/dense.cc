@@ -84,6 +84,8 @@ void DenseOptions::Check() const {
               ">= 1",
               surface_radius_cells);
   CheckOption(off_surface_gsd > 0, "--off_surface_gsd", "> 0", off_surface_gsd);
+  CheckOption(
+      max_growth_passes >= 0, "--max_growth_passes", ">= 0", max_growth_passes);
   search.Check();
   mpgc.Check();
 }
@@ -475,25 +477,82 @@ std::vector<Cell> DensePattern(const cv::Mat& gray,
   return cells;
 }
 
-// Approximation and MPGC for one cell, between two depths along its ray.
+// MPGC for one cell from an approximation of its object point (and of the
+// surface normal there, where known): the search views that correlate with
+// the master at the approximation, the joint solution, and the precision
+// test along the ray.
+void SolveCell(const MpgcView& master,
+               const std::vector<MpgcView>& search,
+               const Ray& ray,
+               const Eigen::Vector3d& approximation,
+               const std::optional<Eigen::Vector3d>& normal,
+               const DenseOptions& options,
+               Cell* cell) {
+  // Views where the approximation does not correlate at all (the point is
+  // hidden there, or lit beyond recognition) are left out of MPGC from the
+  // start instead of being found and dropped one re-solution at a time.
+  const std::vector<double> view_ncc =
+      ViewCorrelations(master,
+                       cell->xy,
+                       search,
+                       approximation,
+                       options.search.window_radius,
+                       normal);
+  std::vector<MpgcView> shown;
+  std::vector<int> index;
+  for (size_t j = 0; j < search.size(); ++j) {
+    if (view_ncc[j] >= options.min_view_ncc) {
+      shown.push_back(search[j]);
+      index.push_back(static_cast<int>(j));
+    }
+  }
+  cell->mpgc =
+      MatchMpgc(master, cell->xy, shown, approximation, options.mpgc, normal);
+  for (int& view : cell->mpgc.views) view = index[view];
+  for (int& view : cell->mpgc.dropped) view = index[view];
+  cell->reason = RejectOf(cell->mpgc.status);
+  if (!cell->mpgc.ok()) return;
+  const double depth = (master.cam_from_world * cell->mpgc.xyz).z();
+  const double gsd = depth / master.camera->MeanFocalLengthPx();
+  const double along = std::sqrt(
+      std::max(0.0, ray.direction.dot(cell->mpgc.covariance * ray.direction)));
+  cell->sigma_gsd = along / gsd;
+  if (cell->sigma_gsd > options.max_sigma_gsd) {
+    cell->reason = DenseReject::kImprecise;
+    return;
+  }
+  cell->depth = depth;
+}
+
+// The master ray of a cell and the cosine of its angle with the optical
+// axis (depth = distance * cosine); nullopt with the reason set where there
+// is none.
+std::optional<std::pair<Ray, double>> CellRay(const MpgcView& master,
+                                              Cell* cell) {
+  const std::optional<Ray> ray = RayThroughPixel(
+      *master.camera, master.cam_from_world, cell->xy, master.frame);
+  if (!ray) {
+    cell->reason = DenseReject::kMpgcOutside;
+    return std::nullopt;
+  }
+  const double cosine = (master.cam_from_world.rotation * ray->direction).z();
+  if (cosine <= 0) {
+    cell->reason = DenseReject::kMpgcBehind;
+    return std::nullopt;
+  }
+  return std::make_pair(*ray, cosine);
+}
+
+// Approximation by correlation along the ray between two depths, then MPGC.
 void MatchCell(const MpgcView& master,
                const std::vector<MpgcView>& search,
                double min_depth,
                double max_depth,
                const DenseOptions& options,
                Cell* cell) {
-  const std::optional<Ray> ray = RayThroughPixel(
-      *master.camera, master.cam_from_world, cell->xy, master.frame);
-  if (!ray) {
-    cell->reason = DenseReject::kMpgcOutside;
-    return;
-  }
-  // Depths to distances along the ray.
-  const double cosine = (master.cam_from_world.rotation * ray->direction).z();
-  if (cosine <= 0) {
-    cell->reason = DenseReject::kMpgcBehind;
-    return;
-  }
+  const auto ray = CellRay(master, cell);
+  if (!ray) return;
+  const double cosine = ray->second;
   // The search along the ray in the nearest views only (they are sorted
   // by viewing direction); which of all the views show the point is asked
   // at the approximation.
@@ -514,34 +573,7 @@ void MatchCell(const MpgcView& master,
     cell->reason = DenseReject::kAmbiguous;
     return;
   }
-  // Views where the approximation does not correlate at all (the point is
-  // hidden there, or lit beyond recognition) are left out of MPGC from the
-  // start instead of being found and dropped one re-solution at a time.
-  const std::vector<double> view_ncc = ViewCorrelations(
-      master, cell->xy, search, found.xyz, options.search.window_radius);
-  std::vector<MpgcView> shown;
-  std::vector<int> index;
-  for (size_t j = 0; j < search.size(); ++j) {
-    if (view_ncc[j] >= options.min_view_ncc) {
-      shown.push_back(search[j]);
-      index.push_back(static_cast<int>(j));
-    }
-  }
-  cell->mpgc = MatchMpgc(master, cell->xy, shown, found.xyz, options.mpgc);
-  for (int& view : cell->mpgc.views) view = index[view];
-  for (int& view : cell->mpgc.dropped) view = index[view];
-  cell->reason = RejectOf(cell->mpgc.status);
-  if (!cell->mpgc.ok()) return;
-  const double depth = (master.cam_from_world * cell->mpgc.xyz).z();
-  const double gsd = depth / master.camera->MeanFocalLengthPx();
-  const double along = std::sqrt(std::max(
-      0.0, ray->direction.dot(cell->mpgc.covariance * ray->direction)));
-  cell->sigma_gsd = along / gsd;
-  if (cell->sigma_gsd > options.max_sigma_gsd) {
-    cell->reason = DenseReject::kImprecise;
-    return;
-  }
-  cell->depth = depth;
+  SolveCell(master, search, ray->first, found.xyz, std::nullopt, options, cell);
 }
 
 // Calls fn(cell) for the accepted cells within `radius` cells of `index`
@@ -564,13 +596,13 @@ void ForEachAcceptedAround(const std::vector<Cell>& cells,
   }
 }
 
-// How far (in depth) a cell misses the plane of inverse depth, linear in
-// the master's pixel coordinates, fitted to the chosen neighbours' rows
-// (du, dv, 1/depth) (with five or more, once more without those off by
-// more than three robust sigmas); 0 where the plane is undetermined.
-double SurfaceMiss(const std::vector<Eigen::Vector3d>& rows_uvw,
-                   std::vector<bool> use,
-                   const Cell& own) {
+// The depth at a cell that the plane of inverse depth, linear in the
+// master's pixel coordinates, fitted to the chosen neighbours' rows
+// (du, dv, 1/depth) relative to the cell (with five or more, once more
+// without those off by more than three robust sigmas) predicts; nullopt
+// where the plane is undetermined.
+std::optional<double> PlaneDepth(const std::vector<Eigen::Vector3d>& rows_uvw,
+                                 std::vector<bool> use) {
   double predicted = 0;
   const int passes = std::count(use.begin(), use.end(), true) >= 5 ? 2 : 1;
   for (int pass = 0; pass < passes; ++pass) {
@@ -583,7 +615,7 @@ double SurfaceMiss(const std::vector<Eigen::Vector3d>& rows_uvw,
       b += a * rows_uvw[k].z();
     }
     const Eigen::Vector3d plane = N.ldlt().solve(b);
-    if (!plane.allFinite()) return 0;
+    if (!plane.allFinite()) return std::nullopt;
     predicted = plane(0);
     if (pass + 1 == passes) break;
     std::vector<double> residuals(rows_uvw.size(), 0.0), used;
@@ -603,8 +635,17 @@ double SurfaceMiss(const std::vector<Eigen::Vector3d>& rows_uvw,
     if (kept < 3) break;
     use = std::move(kept_use);
   }
-  if (!(predicted > 0)) return 0;
-  return std::abs(1 / predicted - own.depth);
+  if (!(predicted > 0)) return std::nullopt;
+  return 1 / predicted;
+}
+
+// How far (in depth) a cell misses the plane of the chosen neighbours
+// (PlaneDepth); 0 where the plane is undetermined.
+double SurfaceMiss(const std::vector<Eigen::Vector3d>& rows_uvw,
+                   const std::vector<bool>& use,
+                   const Cell& own) {
+  const std::optional<double> depth = PlaneDepth(rows_uvw, use);
+  return depth ? std::abs(*depth - own.depth) : 0;
 }
 
 // A crease or step is judged by the neighbours on the cell's own side
@@ -666,33 +707,53 @@ DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
   return DenseReject::kOffSurface;
 }
 
+// The unit normal of the plane through `points` (least squares), facing
+// `towards`; nullopt for fewer than four points or points near a line.
+std::optional<Eigen::Vector3d> PlaneNormal(
+    const std::vector<Eigen::Vector3d>& points,
+    const Eigen::Vector3d& towards) {
+  if (points.size() < 4) return std::nullopt;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) mean += p;
+  mean /= points.size();
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : points) {
+    scatter += (p - mean) * (p - mean).transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+  // Points along a line (a row of cells) leave the plane turning about it.
+  if (!(eigen.eigenvalues()(1) > 0.05 * eigen.eigenvalues()(2))) {
+    return std::nullopt;
+  }
+  Eigen::Vector3d normal = eigen.eigenvectors().col(0);
+  if (normal.dot(towards) < 0) normal = -normal;
+  return normal;
+}
+
+// The accepted object points of the cells within `radius` of `index`.
+std::vector<Eigen::Vector3d> AcceptedPointsAround(
+    const std::vector<Cell>& cells, int cols, int rows, int index, int radius) {
+  std::vector<Eigen::Vector3d> points;
+  ForEachAcceptedAround(
+      cells, cols, rows, index, radius, [&](const Cell& cell) {
+        points.push_back(cell.mpgc.xyz);
+      });
+  return points;
+}
+
 // The unit normal of the plane through the accepted points of the cells
-// around `index`, facing the master's projection centre.
+// around `index` (the nearest ring that determines one), facing the
+// master's projection centre.
 Eigen::Vector3f CellNormal(const std::vector<Cell>& cells,
                            int cols,
                            int rows,
                            int index,
                            const Eigen::Vector3d& centre) {
-  const Eigen::Vector3d& own = cells[index].mpgc.xyz;
-  Eigen::Vector3d towards = (centre - own).normalized();
+  const Eigen::Vector3d towards = (centre - cells[index].mpgc.xyz).normalized();
   for (int radius = 1; radius <= 2; ++radius) {
-    std::vector<Eigen::Vector3d> points;
-    ForEachAcceptedAround(
-        cells, cols, rows, index, radius, [&](const Cell& cell) {
-          points.push_back(cell.mpgc.xyz);
-        });
-    if (points.size() < 4) continue;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& p : points) mean += p;
-    mean /= points.size();
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-    for (const Eigen::Vector3d& p : points) {
-      scatter += (p - mean) * (p - mean).transpose();
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
-    Eigen::Vector3d normal = eigen.eigenvectors().col(0);
-    if (normal.dot(towards) < 0) normal = -normal;
-    return normal.cast<float>();
+    const std::optional<Eigen::Vector3d> normal = PlaneNormal(
+        AcceptedPointsAround(cells, cols, rows, index, radius), towards);
+    if (normal) return normal->cast<float>();
   }
   return towards.cast<float>();
 }
@@ -703,6 +764,139 @@ Eigen::Matrix<uint8_t, 3, 1> ColorAt(const cv::Mat& bgr,
   const int y = std::clamp(static_cast<int>(xy.y()), 0, bgr.rows - 1);
   const cv::Vec3b& pixel = bgr.at<cv::Vec3b>(y, x);
   return Eigen::Matrix<uint8_t, 3, 1>(pixel[2], pixel[1], pixel[0]);
+}
+
+// Blunders that MPGC's own tests let through: off the surface of their
+// neighbours, or isolated (SurfaceVerdict; judged all at once, so that one
+// blunder does not change the verdict on another).
+void RejectOffSurface(int cols,
+                      int rows,
+                      const DenseOptions& options,
+                      double gsd_per_depth,
+                      std::vector<Cell>* cells) {
+  std::vector<std::pair<int, DenseReject>> verdicts;
+  for (int i = 0; i < static_cast<int>(cells->size()); ++i) {
+    if ((*cells)[i].reason != DenseReject::kAccepted) continue;
+    const DenseReject verdict =
+        SurfaceVerdict(*cells, cols, rows, i, options, gsd_per_depth);
+    if (verdict != DenseReject::kAccepted) verdicts.push_back({i, verdict});
+  }
+  for (const auto& [i, verdict] : verdicts) (*cells)[i].reason = verdict;
+}
+
+// Whether a cell without a point may get one from the surface around it:
+// it has texture and lies in the master, but the search along its ray, MPGC
+// or a test after it failed.
+bool Growable(DenseReject reason) {
+  switch (reason) {
+    case DenseReject::kNoApproximation:
+    case DenseReject::kAmbiguous:
+    case DenseReject::kMpgcTooFewViews:
+    case DenseReject::kMpgcNotConverged:
+    case DenseReject::kMpgcSingular:
+    case DenseReject::kImprecise:
+    case DenseReject::kOffSurface:
+    case DenseReject::kIsolated:
+      return true;
+    default:
+      return false;
+  }
+}
+
+// Region growing (as Otto and Chau 1989 grow stereo matches from seeds): a
+// cell without a point whose accepted neighbours (min_neighbors or more
+// within surface_radius_cells) determine the surface there gets its
+// approximation from them, the depth from the plane of their inverse depths
+// (PlaneDepth) and the search patches' shapes from the plane through their
+// object points, and MPGC starts from it without a search along the ray.
+// Where the correlation along the ray found nothing (a face seen obliquely,
+// where the window shaped for a plane facing the master does not fit),
+// MPGC's larger patches, shaped by the surface, often still do. Passes
+// repeat while they add points; a cell is tried again only when more
+// neighbours support it than at its last try; after each pass the
+// off-surface test runs again over all points, so that a grown blunder
+// seeds nothing.
+void GrowSurface(const MpgcView& master,
+                 const std::vector<MpgcView>& search,
+                 int cols,
+                 int rows,
+                 const DenseOptions& options,
+                 const Eigen::Vector3d& master_centre,
+                 double gsd_per_depth,
+                 std::vector<Cell>* cells_ptr) {
+  std::vector<Cell>& cells = *cells_ptr;
+  std::vector<int> tried_support(cells.size(), 0);
+  for (int pass = 0; pass < options.max_growth_passes; ++pass) {
+    std::vector<int> todo;
+    std::vector<int> support;
+    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
+      if (!Growable(cells[i].reason)) continue;
+      int count = 0;
+      ForEachAcceptedAround(
+          cells, cols, rows, i, options.surface_radius_cells, [&](const Cell&) {
+            ++count;
+          });
+      if (count < std::max(kMinSideNeighbors, options.min_neighbors) ||
+          count <= tried_support[i]) {
+        continue;
+      }
+      todo.push_back(i);
+      support.push_back(count);
+    }
+    if (todo.empty()) break;
+    // Each pass reads the cells as they were before it and writes its
+    // results afterwards: threads never read a cell another one writes.
+    std::vector<Cell> grown(todo.size());
+    ParallelFor(static_cast<int>(todo.size()), options.num_threads, [&](int k) {
+      const int index = todo[k];
+      Cell& cell = grown[k];
+      cell = cells[index];
+      cell.mpgc = MpgcResult();
+      cell.depth = std::numeric_limits<double>::quiet_NaN();
+      std::vector<Eigen::Vector3d> rows_uvw;
+      ForEachAcceptedAround(cells,
+                            cols,
+                            rows,
+                            index,
+                            options.surface_radius_cells,
+                            [&](const Cell& other) {
+                              const Eigen::Vector2d d = other.xy - cell.xy;
+                              rows_uvw.emplace_back(
+                                  d.x(), d.y(), 1 / other.depth);
+                            });
+      const std::optional<double> depth =
+          PlaneDepth(rows_uvw, std::vector<bool>(rows_uvw.size(), true));
+      const auto ray = CellRay(master, &cell);
+      if (!depth || !ray) return;
+      const Eigen::Vector3d approximation =
+          ray->first.origin + ray->first.direction * (*depth / ray->second);
+      const std::optional<Eigen::Vector3d> normal = PlaneNormal(
+          AcceptedPointsAround(
+              cells, cols, rows, index, options.surface_radius_cells),
+          (master_centre - approximation).normalized());
+      SolveCell(
+          master, search, ray->first, approximation, normal, options, &cell);
+      // MPGC's pull-in range is wider than the off-surface test's tolerance:
+      // a grown point that left the surface it was predicted from is not
+      // confirmed by it.
+      if (cell.reason == DenseReject::kAccepted &&
+          std::abs(cell.depth - *depth) >
+              options.off_surface_gsd * *depth * gsd_per_depth) {
+        cell.reason = DenseReject::kOffSurface;
+      }
+    });
+    size_t added = 0;
+    for (size_t k = 0; k < todo.size(); ++k) {
+      tried_support[todo[k]] = support[k];
+      // A cell keeps the reason of its first failure unless it now has a
+      // point: what stopped it first is what its picture should show.
+      if (grown[k].reason != DenseReject::kAccepted) continue;
+      cells[todo[k]] = grown[k];
+      ++added;
+    }
+    RejectOffSurface(cols, rows, options, gsd_per_depth, &cells);
+    if (added == 0) break;
+  }
 }
 
 // A master's accepted depths on its cell grid (NaN where none).
@@ -887,22 +1081,16 @@ PointCloud DenseReconstruct(const Scene& scene,
       progress.Add();
     });
 
-    // Blunders that MPGC's own tests let through: off the surface of their
-    // neighbours (judged all at once, so that one blunder does not change
-    // the verdict on another).
-    std::vector<std::pair<int, DenseReject>> verdicts;
-    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
-      if (cells[i].reason != DenseReject::kAccepted) continue;
-      const DenseReject verdict =
-          SurfaceVerdict(cells,
-                         cols,
-                         rows,
-                         i,
-                         options,
-                         1 / master.camera->MeanFocalLengthPx());
-      if (verdict != DenseReject::kAccepted) verdicts.push_back({i, verdict});
-    }
-    for (const auto& [i, verdict] : verdicts) cells[i].reason = verdict;
+    const double gsd_per_depth = 1 / master.camera->MeanFocalLengthPx();
+    RejectOffSurface(cols, rows, options, gsd_per_depth, &cells);
+    GrowSurface(master,
+                search,
+                cols,
+                rows,
+                options,
+                master_image.cam_from_world.Center(),
+                gsd_per_depth,
+                &cells);
     DepthGrid& grid = grids[m];
     grid.view = master;
     grid.cols = cols;

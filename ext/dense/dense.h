@@ -26,6 +26,11 @@
 //    Then every point is tested against the plane of its neighbours in the
 //    master's cell grid (inverse depth over the pixel coordinates, fitted
 //    robustly); those off it are rejected as blunders.
+//    Then region growing: cells still without a point, where five or more
+//    accepted neighbours determine the surface around them, get their
+//    approximation (depth and the search patches' shapes) from that surface
+//    and MPGC starts from it; passes repeat while points are added, the
+//    off-surface test after each.
 //    Last, every point is tested against the other masters' surfaces
 //    (visibility: a point may not hide what another master saw, nor be
 //    matched in a master whose surface hides it).
@@ -98,6 +103,10 @@ struct DenseOptions {
   double off_surface_gsd = 3.0;
   // Fewer accepted neighbours within surface_radius_cells: isolated.
   int min_neighbors = 3;
+  // Region growing after the search along the rays: passes of MPGC from
+  // the surface of the accepted neighbours for the cells still without a
+  // point (0: off).
+  int max_growth_passes = 8;
   int num_threads = -1;
   DenseOptions();      // the dense stage's own defaults for search and mpgc
   void Check() const;  // throws InputError naming field, value, rule

@@ -174,6 +174,54 @@ TEST(Dense, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
   EXPECT_GE(facing, 0.95 * cloud.size());
 }
 
+// Region growing: cells the search along the ray leaves without an
+// approximation get one from the surface of their accepted neighbours. Here
+// the search is made to give up on most cells (any second peak along the
+// ray within 0.8 of the best makes a cell ambiguous, and the few cells left
+// are mostly isolated), so that the points come mostly from growth: 1231
+// against 551 without it and 1376 from the search alone (when measured),
+// and as exact.
+TEST(Dense, GrowthFillsTheCellsTheSearchLeftWithoutApproximation) {
+  const PlaneScene plane(2.0);
+  const Scene scene = plane.ToScene();
+  std::map<image_t, DenseImage> images;
+  for (size_t j = 0; j < plane.images.size(); ++j) {
+    images[static_cast<image_t>(j + 1)].gray = plane.images[j];
+  }
+  const std::vector<MasterSelection> masters = {{1, {2, 3, 4, 5}}};
+  const double gsd = 4.0 / plane.camera.MeanFocalLengthPx();
+  const auto run = [&](double min_peak_margin, int growth_passes) {
+    DenseOptions options;
+    options.num_threads = 2;
+    options.mpgc.geometric_sigma_px = 0.01;
+    options.min_peak_margin = min_peak_margin;
+    options.max_growth_passes = growth_passes;
+    DenseReport report;
+    const PointCloud cloud =
+        DenseReconstruct(scene, images, masters, options, &report, nullptr);
+    double sum_sq = 0;
+    for (const Eigen::Vector3d& p : cloud.positions) sum_sq += p.z() * p.z();
+    const double rms_gsd =
+        cloud.size() > 0 ? std::sqrt(sum_sq / cloud.size()) / gsd : 0;
+    std::printf(
+        "margin %.1f, %d growth passes: %zu points, %zu ambiguous, "
+        "RMS %.3f GSD\n",
+        min_peak_margin,
+        growth_passes,
+        cloud.size(),
+        report.masters[0].rejects[static_cast<int>(DenseReject::kAmbiguous)],
+        rms_gsd);
+    return std::make_pair(cloud.size(), rms_gsd);
+  };
+  const auto [searched, searched_rms] = run(0.0, 0);
+  const auto [few, few_rms] = run(0.8, 0);
+  const auto [grown, grown_rms] = run(0.8, 8);
+  ASSERT_LT(few, searched / 2) << "the search must give up on most cells";
+  EXPECT_GE(grown, 0.85 * searched);
+  EXPECT_LT(grown_rms, 0.1);
+  EXPECT_LT(grown_rms, 1.5 * searched_rms);
+}
+
 // An image that two masters need is read and high-passed once: the grey
 // values every master sees are the same filtered image.
 TEST(Dense, ImagesAreFilteredOnce) {

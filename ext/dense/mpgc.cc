@@ -128,15 +128,17 @@ std::optional<MasterRays> RaysOf(const MpgcView& master,
   return rays;
 }
 
-// The search patch's shape: how a plane through X facing the master maps
-// a master pixel step into the search image. Where the master rays of the
-// pixel and of its neighbours meet the plane, projected into the search
-// image (X itself need not lie on the master ray: it is an approximation).
+// The search patch's shape: how a plane through X with the given normal
+// (facing the master where none is given) maps a master pixel step into
+// the search image. Where the master rays of the pixel and of its
+// neighbours meet the plane, projected into the search image (X itself need
+// not lie on the master ray: it is an approximation).
 bool InducedShape(const MasterRays& rays,
                   const MpgcView& view,
                   const Eigen::Vector3d& xyz,
+                  const std::optional<Eigen::Vector3d>& plane_normal,
                   Eigen::Matrix2d* shape) {
-  const Eigen::Vector3d& normal = rays.centre.direction;
+  const Eigen::Vector3d normal = plane_normal.value_or(rays.centre.direction);
   const auto on_plane = [&](const Ray& ray, Eigen::Vector2d* pixel) {
     const double denominator = ray.direction.dot(normal);
     if (std::abs(denominator) < 1e-9) return false;
@@ -407,7 +409,7 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   std::vector<Eigen::Matrix2d> shapes(search.size());
   std::vector<bool> shaped(search.size(), false);
   for (size_t j = 0; j < search.size(); ++j) {
-    shaped[j] = InducedShape(rays, search[j], middle, &shapes[j]);
+    shaped[j] = InducedShape(rays, search[j], middle, std::nullopt, &shapes[j]);
   }
   std::vector<double> score(n, -2);
   std::vector<int> views(n, 0);
@@ -465,18 +467,20 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   return result;
 }
 
-std::vector<double> ViewCorrelations(const MpgcView& master,
-                                     const Eigen::Vector2d& master_xy,
-                                     const std::vector<MpgcView>& views,
-                                     const Eigen::Vector3d& xyz,
-                                     int window_radius) {
+std::vector<double> ViewCorrelations(
+    const MpgcView& master,
+    const Eigen::Vector2d& master_xy,
+    const std::vector<MpgcView>& views,
+    const Eigen::Vector3d& xyz,
+    int window_radius,
+    const std::optional<Eigen::Vector3d>& normal) {
   std::vector<double> correlations(views.size(), -2);
   const std::optional<MasterWindow> master_window =
       WindowOf(master, master_xy, window_radius);
   if (!master_window) return correlations;
   for (size_t j = 0; j < views.size(); ++j) {
     Eigen::Matrix2d shape;
-    if (!InducedShape(master_window->rays, views[j], xyz, &shape) ||
+    if (!InducedShape(master_window->rays, views[j], xyz, normal, &shape) ||
         !CorrelateAt(
             master_window->window, views[j], xyz, shape, &correlations[j])) {
       correlations[j] = -2;
@@ -489,7 +493,8 @@ MpgcResult MatchMpgc(const MpgcView& master,
                      const Eigen::Vector2d& master_xy,
                      const std::vector<MpgcView>& search,
                      const Eigen::Vector3d& approximation,
-                     const MpgcOptions& options) {
+                     const MpgcOptions& options,
+                     const std::optional<Eigen::Vector3d>& normal) {
   options.Check();
   MpgcResult result;
   result.xyz = approximation;
@@ -525,7 +530,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
     Eigen::Vector2d centre;
     if (!Project(search[j], approximation, &centre) ||
         (search[j].cam_from_world * approximation).z() <= 0 || !rays ||
-        !InducedShape(*rays, search[j], approximation, &shape)) {
+        !InducedShape(*rays, search[j], approximation, normal, &shape)) {
       result.dropped.push_back(static_cast<int>(j));
       continue;
     }

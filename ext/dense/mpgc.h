@@ -42,6 +42,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <vector>
 
 namespace bayon {
@@ -152,22 +153,28 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
 
 // Per view, the correlation of the master window (2 window_radius + 1
 // square) at `master_xy` with that view's window around the projection of
-// `xyz`, shaped as in SearchMasterRay; -2 where it projects outside: which
-// views show the point at all.
-std::vector<double> ViewCorrelations(const MpgcView& master,
-                                     const Eigen::Vector2d& master_xy,
-                                     const std::vector<MpgcView>& views,
-                                     const Eigen::Vector3d& xyz,
-                                     int window_radius);
+// `xyz`, shaped as in SearchMasterRay or, with a `normal`, by the plane
+// with that normal; -2 where it projects outside: which views show the
+// point at all.
+std::vector<double> ViewCorrelations(
+    const MpgcView& master,
+    const Eigen::Vector2d& master_xy,
+    const std::vector<MpgcView>& views,
+    const Eigen::Vector3d& xyz,
+    int window_radius,
+    const std::optional<Eigen::Vector3d>& normal = std::nullopt);
 
 // Matches the master pixel `master_xy` into the search views, starting from
 // the object point `approximation` (e.g. from correlation along the
 // epipolar line) with each search patch shaped by the local affinity that a
-// plane through it facing the master induces.
-MpgcResult MatchMpgc(const MpgcView& master,
-                     const Eigen::Vector2d& master_xy,
-                     const std::vector<MpgcView>& search,
-                     const Eigen::Vector3d& approximation,
-                     const MpgcOptions& options);
+// plane through it induces: the plane with `normal` (object system; e.g.
+// from the surface found around the point), or one facing the master.
+MpgcResult MatchMpgc(
+    const MpgcView& master,
+    const Eigen::Vector2d& master_xy,
+    const std::vector<MpgcView>& search,
+    const Eigen::Vector3d& approximation,
+    const MpgcOptions& options,
+    const std::optional<Eigen::Vector3d>& normal = std::nullopt);
 
 }  // namespace bayon
