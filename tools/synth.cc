@@ -133,6 +133,10 @@ int RunSynth(int argc, char** argv) {
   app.add_option("--jpeg_quality",
                  tower.jpeg_quality,
                  "tower scene: 0 writes PNG, 1..100 JPEG at that quality");
+  app.add_option("--one_light",
+                 tower.one_light,
+                 "tower scene: 1: every photograph in the first one's light "
+                 "(sun, sky, exposure)");
   app.add_option("--film_scan",
                  tower.film_scan,
                  "tower scene: 1: scanned film frames (rotated, shifted, "

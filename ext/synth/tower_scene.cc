@@ -263,6 +263,13 @@ TowerScene PlanTowerScene(const TowerSceneOptions& options) {
     scene.stations.push_back(station);
     azimuth += steps[i];
   }
+  if (options.one_light) {
+    for (TowerStation& station : scene.stations) {
+      station.lighting = scene.stations.front().lighting;
+      station.weather = scene.stations.front().weather;
+      station.exposure = scene.stations.front().exposure;
+    }
+  }
   // Held-out viewpoints: between stations, at heights the photographs did
   // not use.
   for (int k = 0; k < options.num_heldout_views; ++k) {

@@ -61,6 +61,12 @@ struct TowerSceneOptions {
   double noise_sigma = 1.0;
   // 0: PNG; 1..100: JPEG at that quality.
   int jpeg_quality = 0;
+  // Every photograph in the light of the first (its sun, sky and
+  // exposure), as if all were taken at one moment: a control for the
+  // stages whose matching the changing light limits (dense, texture). The
+  // random draws are the same either way, so the scene is otherwise the
+  // one with changing light.
+  bool one_light = false;
   // Scanned film: see the header comment.
   bool film_scan = false;
   double film_margin_mm = 2.0;

@@ -283,6 +283,29 @@ TEST(TowerScene, StationsFollowThePlan) {
             scene.stations[5].cam_from_world.translation);
 }
 
+// One light: the same stations, every photograph in the first one's light.
+TEST(TowerScene, OneLightKeepsTheStationsAndTakesTheFirstLight) {
+  TowerSceneOptions options = SmallSceneOptions();
+  options.num_views = 16;
+  const TowerScene changing = PlanTowerScene(options);
+  options.one_light = true;
+  const TowerScene one = PlanTowerScene(options);
+  ASSERT_EQ(one.stations.size(), changing.stations.size());
+  for (size_t i = 0; i < one.stations.size(); ++i) {
+    const TowerStation& a = one.stations[i];
+    EXPECT_EQ(a.cam_from_world.translation,
+              changing.stations[i].cam_from_world.translation);
+    EXPECT_EQ(a.exposure, changing.stations[0].exposure);
+    EXPECT_EQ(a.weather, changing.stations[0].weather);
+    EXPECT_EQ(a.lighting.sun_direction,
+              changing.stations[0].lighting.sun_direction);
+    EXPECT_EQ(a.lighting.sun_intensity,
+              changing.stations[0].lighting.sun_intensity);
+    EXPECT_EQ(a.lighting.ambient_intensity,
+              changing.stations[0].lighting.ambient_intensity);
+  }
+}
+
 TEST(TowerScene, RejectsBadOptions) {
   TowerSceneOptions options = SmallSceneOptions();
   options.num_views = 1;

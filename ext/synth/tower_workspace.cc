@@ -80,6 +80,7 @@ nlohmann::ordered_json OptionsToJson(const TowerSceneOptions& o) {
   json["rendering"] = {{"supersampling", o.supersampling},
                        {"noise_sigma", o.noise_sigma},
                        {"jpeg_quality", o.jpeg_quality},
+                       {"one_light", o.one_light},
                        {"film_scan", o.film_scan},
                        {"film_margin_mm", o.film_margin_mm},
                        {"film_max_rotation_deg", o.film_max_rotation_deg},

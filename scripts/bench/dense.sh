@@ -7,6 +7,9 @@
 #             `bayon evaluate` against the true surface
 #             (completeness within 5 GSD: the dense pattern's 7-pixel cells
 #             leave points about 5 pixels apart at most)
+#   one_light the same tower with every photograph in the first one's
+#             light (`synth --one_light 1`), the same model: a control for
+#             what the photographs' changing sun costs
 #   temple    ../shared/data/temple-ring, bayon's own orientation (the chain
 #   fountain  benchmark's adjusted models; it runs first where they are
 #             missing), 5 masters
@@ -62,11 +65,29 @@ dense() {
     --input_path "$model" --output_path "$dir/$name/dense/points.ply" \
     --overwrite 1 --num_threads "$threads" "$@"
 }
+# evaluate NAME GT: the cloud against the true surface
+evaluate() {
+  "$BAYON" evaluate --ground_truth_path "$2" \
+    --cloud_path "$dir/$1/dense/points.ply" --completeness_threshold_gsd 5 \
+    --output_path "$dir/$1/evaluation.json" >"$dir/$1/evaluate.log" 2>&1 ||
+    { cat "$dir/$1/evaluate.log" >&2; exit 1; }
+}
 dense tower "$tower/ws/images" "$tower/model"
-"$BAYON" evaluate --ground_truth_path "$tower/ws/gt" \
-  --cloud_path "$dir/tower/dense/points.ply" --completeness_threshold_gsd 5 \
-  --output_path "$dir/tower/evaluation.json" >"$dir/tower/evaluate.log" 2>&1 ||
-  { cat "$dir/tower/evaluate.log" >&2; exit 1; }
+evaluate tower "$tower/ws/gt"
+# The control: the same tower, stations and noise, every photograph in the
+# first one's light (`synth --one_light 1`), with the same model: what the
+# changing light of the photographs costs.
+one_light="$dir/one_light"
+if [ ! -f "$one_light/ws/gt/synth.json" ]; then
+  rm -rf "$one_light"
+  mkdir -p "$one_light"
+  "$BAYON" synth --scene tower --output_path "$one_light/ws" --seed 2 \
+    --num_heldout_views 0 --one_light 1 --num_threads "$threads" \
+    >"$one_light/synth.log" 2>&1
+fi
+rm -rf "$one_light/dense"
+dense one_light "$one_light/ws/images" "$tower/model"
+evaluate one_light "$one_light/ws/gt"
 dense temple "$BAYON_DATA_DIR/temple-ring" "$chain_dir/temple/adjusted"
 dense fountain "$BAYON_DATA_DIR/fountain-P11/images" \
   "$chain_dir/fountain/adjusted"
@@ -75,7 +96,7 @@ printf '\n%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s\n' set cells points \
   time "cells/s" "points/s" peak "acc med" "acc RMS" "acc p95" complete
 printf '%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s\n' "" "" "" s "" "" MB \
   GSD GSD GSD "5 GSD"
-for name in tower temple fountain; do
+for name in tower one_light temple fountain; do
   read -r cells points < <(python3 -c '
 import json, sys
 r = json.load(open(sys.argv[1]))
@@ -101,6 +122,7 @@ done
 echo
 echo "cells: the dense pattern's cells in all masters (each tried: textured"
 echo "ones matched, the rest rejected at once); points: those accepted."
-echo "tower: true orientation with triangulated tie points; temple, fountain:"
+echo "tower: true orientation with triangulated tie points; one_light: the"
+echo "same tower photographed in one light (synth --one_light 1); temple, fountain:"
 echo "bayon's own orientation (chain.sh)."
 echo "Threads: $threads. Reject reasons per master: build/bench/dense/*/dense/points.json"
