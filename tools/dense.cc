@@ -178,6 +178,9 @@ int RunDense(int argc, char** argv) {
                  options.max_growth_passes,
                  "Region growing: passes of MPGC from the surface of the "
                  "accepted neighbours (0 = off)");
+  app.add_option("--growth_min_search_views",
+                 options.growth_min_search_views,
+                 "Region growing: search images a grown point needs");
   app.add_option("--num_threads", options.num_threads, "-1 = all cores");
   app.add_option("--overwrite", overwrite, "Replace existing output files");
   app.add_option(

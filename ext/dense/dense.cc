@@ -825,6 +825,8 @@ void GrowSurface(const MpgcView& master,
                  double gsd_per_depth,
                  std::vector<Cell>* cells_ptr) {
   std::vector<Cell>& cells = *cells_ptr;
+  DenseOptions grow_options = options;
+  grow_options.mpgc.min_search_views = options.growth_min_search_views;
   std::vector<int> tried_support(cells.size(), 0);
   for (int pass = 0; pass < options.max_growth_passes; ++pass) {
     std::vector<int> todo;
@@ -874,8 +876,13 @@ void GrowSurface(const MpgcView& master,
           AcceptedPointsAround(
               cells, cols, rows, index, options.surface_radius_cells),
           (master_centre - approximation).normalized());
-      SolveCell(
-          master, search, ray->first, approximation, normal, options, &cell);
+      SolveCell(master,
+                search,
+                ray->first,
+                approximation,
+                normal,
+                grow_options,
+                &cell);
       // MPGC's pull-in range is wider than the off-surface test's tolerance:
       // a grown point that left the surface it was predicted from is not
       // confirmed by it.
