@@ -16,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "tests/testing.h"
 
@@ -363,6 +364,28 @@ TEST(DenseCommand, RefusesBadInput) {
   bare[4] = ws + "/bare";
   ExpectRefused(ws, bare, "--min_depth");
 
+  // A model without calibration: a camera with no focal length, and no
+  // calibration.json beside it.
+  testing::CopyTree(ws + "/model", ws + "/uncalibrated");
+  fs::remove(ws + "/uncalibrated/calibration.json");
+  {
+    std::ifstream in(ws + "/model/cameras.txt");
+    std::ofstream out(ws + "/uncalibrated/cameras.txt");
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty() && line[0] != '#') {
+        std::istringstream fields(line);
+        std::string id, model, width, height, fx, fy, rest;
+        fields >> id >> model >> width >> height >> fx >> fy;
+        std::getline(fields, rest);
+        line = id + " " + model + " " + width + " " + height + " 0 0" + rest;
+      }
+      out << line << "\n";
+    }
+  }
+  std::vector<std::string> uncalibrated = args;
+  uncalibrated[4] = ws + "/uncalibrated";
+  ExpectRefused(ws, uncalibrated, "has no calibration: focal length 0");
+
   std::vector<std::string> bad_option = args;
   bad_option.insert(bad_option.end(), {"--cell_size", "0"});
   ExpectRefused(ws, bad_option, "--cell_size");
@@ -378,6 +401,49 @@ TEST(DenseCommand, RefusesBadInput) {
   std::string content;
   std::getline(kept, content);
   EXPECT_EQ(content, "mine");
+}
+
+// What is missing costs only its own part: a search photograph that is not
+// there is left out, a master whose photograph is missing is skipped, and a
+// master entirely in shadow (black) gives no points, each said in the
+// summary and points.json, while the other master is matched as usual.
+// With no master left to match, the run is refused.
+TEST(DenseCommand, MastersAreMatchedWithoutWhatIsMissing) {
+  const std::string ws = CopyOfTower("dense_tower_missing");
+  fs::remove(ws + "/images/image_001.png");  // a search image of image_002
+  fs::remove(ws + "/images/image_006.png");  // a master
+  const cv::Mat shadow(800, 1200, CV_8UC3, cv::Scalar(0, 0, 0));
+  ASSERT_TRUE(cv::imwrite(ws + "/images/image_010.png", shadow));
+  std::vector<std::string> args = DenseArgs(ws);
+  args[6] = "image_002.png,image_010.png,image_006.png";
+  const testing::CommandResult result = testing::RunBayon(args);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("left out: " + ws + "/images/image_001.png"),
+            std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("master image_006.png: skipped, its image "
+                               "could not be read"),
+            std::string::npos)
+      << result.output;
+  nlohmann::json report;
+  std::ifstream(ws + "/dense/points.json") >> report;
+  ASSERT_EQ(report["masters"].size(), 3u);
+  const nlohmann::json& matched = report["masters"][0];
+  const nlohmann::json& shadowed = report["masters"][1];
+  const nlohmann::json& missing = report["masters"][2];
+  EXPECT_EQ(matched["name"], "image_002.png");
+  EXPECT_GT(matched["num_points"].get<int>(), 200);  // measured 459
+  for (const auto& id : matched["search_image_ids"]) EXPECT_NE(id, 1);
+  EXPECT_EQ(shadowed["num_points"].get<int>(), 0);
+  EXPECT_EQ(shadowed["rejected"]["no_texture"], shadowed["num_cells"]);
+  EXPECT_EQ(missing["skipped"], "its image could not be read");
+  EXPECT_TRUE(fs::exists(ws + "/dense/rejects/image_010.png"));
+  EXPECT_FALSE(fs::exists(ws + "/dense/rejects/image_006.png"));
+
+  fs::remove(ws + "/images/image_002.png");
+  fs::remove_all(ws + "/dense");
+  args[6] = "image_002.png,image_006.png";
+  ExpectRefused(ws, args, "no master image can be matched");
 }
 
 }  // namespace

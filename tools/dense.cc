@@ -36,6 +36,7 @@ nlohmann::ordered_json ReportToJson(const DenseReport& report,
     entry["image_id"] = master.master;
     entry["name"] = master.name;
     entry["search_image_ids"] = master.search;
+    if (!master.skipped.empty()) entry["skipped"] = master.skipped;
     entry["min_depth"] = master.min_depth;
     entry["max_depth"] = master.max_depth;
     entry["num_cells"] = master.num_cells;
@@ -220,8 +221,14 @@ int RunDense(int argc, char** argv) {
     LOG(INFO) << "master " << scene.images.at(selection.master).name
               << ", search images " << search;
   }
-  const std::map<image_t, DenseImage> images =
-      LoadDenseImages(scene, masters, in.image_path, options.highpass_sigma_px);
+  // A photograph that cannot be read costs its own part only: the masters
+  // match without it (DenseReconstruct), and the summary says so.
+  std::map<image_t, std::string> unreadable;
+  const std::map<image_t, DenseImage> images = LoadDenseImages(
+      scene, masters, in.image_path, options.highpass_sigma_px, &unreadable);
+  for (const auto& [id, error] : unreadable) {
+    LOG(WARNING) << "left out: " << error;
+  }
   DenseReport report;
   std::vector<std::vector<image_t>> seen;
   const PointCloud cloud =
@@ -255,12 +262,18 @@ int RunDense(int argc, char** argv) {
   const fs::path rejects_folder = output_folder / "rejects";
   fs::create_directories(rejects_folder);
   for (const DenseMasterReport& master : report.masters) {
+    if (!master.skipped.empty()) continue;
     WriteImage(
         (rejects_folder / fs::path(master.name).stem()).string() + ".png",
         RejectMap(master, images.at(master.master).color));
   }
-  command.PrintSummary(report.Summary() + "\n  -> " + output_path + ", " +
-                       fused_path + ", " + rejects_folder.string() + "/");
+  std::string left_out;
+  for (const auto& [id, error] : unreadable) {
+    left_out += "\n  left out: " + error;
+  }
+  command.PrintSummary(report.Summary() + left_out + "\n  -> " + output_path +
+                       ", " + fused_path + ", " + rejects_folder.string() +
+                       "/");
   return 0;
 }
 

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 
@@ -190,6 +191,28 @@ Scene ReadOrientedModel(const std::string& model_path,
   for (const auto& [camera_id, camera] :
        ReadCalibrationsBesideModel(model_path)) {
     if (scene.cameras.contains(camera_id)) scene.cameras.at(camera_id) = camera;
+  }
+  // Dense matching, texturing and rendering project through the cameras: a
+  // camera without a focal length (a model that was never calibrated, or
+  // whose parameters were lost) would give nothing, silently.
+  for (const auto& [image_id, image] : scene.images) {
+    const Camera& camera = scene.cameras.at(image.camera_id);
+    const double focal = camera.MeanFocalLengthPx();
+    bool finite = std::isfinite(focal);
+    for (double p : camera.params) finite = finite && std::isfinite(p);
+    if (!finite || !(focal > 0)) {
+      ThrowInputError(model_path,
+                      ": camera ",
+                      image.camera_id,
+                      " (",
+                      camera.ModelName(),
+                      ", of image ",
+                      image.name,
+                      ") has no calibration: focal length ",
+                      focal,
+                      " px; orient and calibrate the images first (bayon "
+                      "adjust) or give a calibrated model");
+    }
   }
   if (!database_path.empty()) {
     Database database(database_path, Database::Mode::kReadOnly);

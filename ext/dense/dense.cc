@@ -260,13 +260,6 @@ std::vector<MasterSelection> SelectMasters(const Scene& scene,
          ++k) {
       selection.search.push_back(ids[by_angle[k].second]);
     }
-    if (selection.search.empty()) {
-      ThrowInputError("master image ",
-                      scene.images.at(ids[m]).name,
-                      " has no other image within --max_search_angle_deg ",
-                      options.max_search_angle_deg,
-                      " of its viewing direction");
-    }
     selections.push_back(std::move(selection));
   }
   return selections;
@@ -276,9 +269,10 @@ std::map<image_t, DenseImage> LoadDenseImages(
     const Scene& scene,
     const std::vector<MasterSelection>& masters,
     const std::string& image_path,
-    double highpass_sigma_px) {
+    double highpass_sigma_px,
+    std::map<image_t, std::string>* unreadable) {
   std::map<image_t, DenseImage> images;
-  const auto load = [&](image_t id, bool color) {
+  const auto read = [&](image_t id, bool color) {
     DenseImage& image = images[id];
     const Image& record = scene.images.at(id);
     const std::string path = image_path + "/" + record.name;
@@ -313,6 +307,16 @@ std::map<image_t, DenseImage> LoadDenseImages(
       if (image.color.depth() == CV_16U) {
         image.color.convertTo(image.color, CV_8U, 1.0 / 257);
       }
+    }
+  };
+  const auto load = [&](image_t id, bool color) {
+    if (unreadable == nullptr) return read(id, color);
+    if (unreadable->count(id) > 0) return;
+    try {
+      read(id, color);
+    } catch (const InputError& error) {
+      images.erase(id);
+      unreadable->emplace(id, error.what());
     }
   };
   for (const MasterSelection& selection : masters) {
@@ -936,6 +940,7 @@ std::vector<bool> ConsistentWithOtherMasters(
     for (size_t g = 0; g < grids.size(); ++g) {
       if (static_cast<int>(g) == master_of[i]) continue;
       const DepthGrid& grid = grids[g];
+      if (grid.view.camera == nullptr) continue;  // a skipped master
       const Eigen::Vector3d in_cam = grid.view.cam_from_world * points[i];
       Eigen::Vector2d pixel;
       if (!(in_cam.z() > 0) ||
@@ -1003,14 +1008,52 @@ PointCloud DenseReconstruct(const Scene& scene,
   };
   const int border = options.mpgc.lsm.patch_radius + 2;
 
-  // One progress display over all masters: the cells each pattern will
-  // have follow from the image size.
+  // What each master has to work with: its search images that could be
+  // read, and its depth range; a master without them is skipped with the
+  // reason, and the others are matched. One progress display over the
+  // masters matched: the cells each pattern will have follow from the
+  // image size.
+  std::vector<std::vector<image_t>> search_ids(masters.size());
+  std::vector<std::optional<SparseDepths>> depths(masters.size());
+  std::vector<std::string> skipped(masters.size());
   size_t total_cells = 0;
-  for (const MasterSelection& selection : masters) {
-    const cv::Mat& gray = images.at(selection.master).gray;
+  for (size_t m = 0; m < masters.size(); ++m) {
+    const MasterSelection& selection = masters[m];
+    for (image_t id : selection.search) {
+      if (images.count(id) > 0) search_ids[m].push_back(id);
+    }
+    if (selection.search.empty()) {
+      skipped[m] = StrCat("no other image within --max_search_angle_deg ",
+                          options.max_search_angle_deg,
+                          " of its viewing direction");
+    } else if (images.count(selection.master) == 0) {
+      skipped[m] = "its image could not be read";
+    } else if (search_ids[m].empty()) {
+      skipped[m] = "none of its search images could be read";
+    } else {
+      try {
+        depths[m].emplace(scene, scene.images.at(selection.master), options);
+      } catch (const InputError& error) {
+        skipped[m] = error.what();
+      }
+    }
+    if (!skipped[m].empty()) continue;
     int cols = 0, rows = 0;
-    PatternSize(gray, options, border, &cols, &rows);
+    PatternSize(
+        images.at(selection.master).gray, options, border, &cols, &rows);
     total_cells += static_cast<size_t>(cols) * rows;
+  }
+  if (std::all_of(skipped.begin(), skipped.end(), [](const std::string& why) {
+        return !why.empty();
+      })) {
+    std::string reasons;
+    for (size_t m = 0; m < masters.size(); ++m) {
+      reasons += StrCat(m == 0 ? "" : "; ",
+                        scene.images.at(masters[m].master).name,
+                        ": ",
+                        skipped[m]);
+    }
+    ThrowInputError("no master image can be matched (", reasons, ")");
   }
   Progress progress("dense", total_cells, "cells");
 
@@ -1027,10 +1070,18 @@ PointCloud DenseReconstruct(const Scene& scene,
     const Timer timer;
     const MasterSelection& selection = masters[m];
     const Image& master_image = scene.images.at(selection.master);
+    if (!skipped[m].empty()) {
+      DenseMasterReport& master_report = report->masters.emplace_back();
+      master_report.master = selection.master;
+      master_report.name = master_image.name;
+      master_report.search = selection.search;
+      master_report.skipped = skipped[m];
+      continue;
+    }
     const MpgcView master = view_of(selection.master);
     std::vector<MpgcView> search;
-    for (image_t id : selection.search) search.push_back(view_of(id));
-    const SparseDepths sparse(scene, master_image, options);
+    for (image_t id : search_ids[m]) search.push_back(view_of(id));
+    const SparseDepths& sparse = *depths[m];
     const double min_depth = sparse.min_depth(), max_depth = sparse.max_depth();
 
     int cols = 0, rows = 0;
@@ -1114,7 +1165,7 @@ PointCloud DenseReconstruct(const Scene& scene,
     DenseMasterReport master_report;
     master_report.master = selection.master;
     master_report.name = master_image.name;
-    master_report.search = selection.search;
+    master_report.search = search_ids[m];
     master_report.min_depth = min_depth;
     master_report.max_depth = max_depth;
     master_report.num_cells = cells.size();
@@ -1158,7 +1209,7 @@ PointCloud DenseReconstruct(const Scene& scene,
       std::vector<image_t>& images_of_point = seen.emplace_back();
       images_of_point.push_back(selection.master);
       for (int view : result.views) {
-        images_of_point.push_back(selection.search[view]);
+        images_of_point.push_back(search_ids[m][view]);
       }
       master_of.push_back(static_cast<int>(m));
       cell_of.push_back(i);
@@ -1213,6 +1264,11 @@ std::string DenseReport::Summary() const {
   out.setf(std::ios::fixed);
   std::array<size_t, static_cast<int>(DenseReject::kNumReasons)> rejects{};
   for (const DenseMasterReport& master : masters) {
+    if (!master.skipped.empty()) {
+      out << "  master " << master.name << ": skipped, " << master.skipped
+          << "\n";
+      continue;
+    }
     out.precision(2);
     out << "  master " << master.name << " (" << master.search.size()
         << " search images, depth " << master.min_depth << " to "

@@ -123,8 +123,9 @@ struct MasterSelection {
   std::vector<image_t> search;  // nearest in viewing direction first
 };
 
-// Throws InputError when the scene has fewer than two images, a named master
-// is not in it, or a master has no search image within the angle.
+// Throws InputError when the scene has fewer than two images or a named
+// master is not in it; a master without any image within the angle gets an
+// empty search list (DenseReconstruct skips it and says why).
 std::vector<MasterSelection> SelectMasters(const Scene& scene,
                                            const DenseOptions& options);
 
@@ -153,7 +154,10 @@ const char* DenseRejectName(DenseReject reason);
 struct DenseMasterReport {
   image_t master = kInvalidImageId;
   std::string name;
-  std::vector<image_t> search;
+  std::vector<image_t> search;  // those used (their images could be read)
+  // Why the master was not matched (no search image, its image or all its
+  // search images unreadable, no depth range); empty when it was.
+  std::string skipped;
   double min_depth = 0, max_depth = 0;
   size_t num_cells = 0;
   size_t num_points = 0;
@@ -200,7 +204,10 @@ struct DenseImage {
 // num_images,
 // master_id, sigma0 (grey values) and correlation (mean over the search
 // patches), with normals and colours; `visibility` (if not null) gets, per
-// point, the image ids it was matched in (the master first).
+// point, the image ids it was matched in (the master first). Search images
+// missing from `images` are left out; a master that cannot be matched (its
+// image missing, no search image, no depth range) is skipped with the
+// reason in its report; InputError when no master can be matched.
 PointCloud DenseReconstruct(const Scene& scene,
                             const std::map<image_t, DenseImage>& images,
                             const std::vector<MasterSelection>& masters,
@@ -210,11 +217,15 @@ PointCloud DenseReconstruct(const Scene& scene,
 
 // Loads the images `masters` need from `image_path` (by the scene's names),
 // the grey values high-pass filtered (minus their Gaussian blur of
-// `highpass_sigma_px`, plus 128; 0: as read).
+// `highpass_sigma_px`, plus 128; 0: as read). An image that cannot be read
+// (missing, corrupt, of another size than its camera) throws InputError,
+// or, with `unreadable`, is left out and its error kept there, so that
+// DenseReconstruct matches the masters without it.
 std::map<image_t, DenseImage> LoadDenseImages(
     const Scene& scene,
     const std::vector<MasterSelection>& masters,
     const std::string& image_path,
-    double highpass_sigma_px);
+    double highpass_sigma_px,
+    std::map<image_t, std::string>* unreadable = nullptr);
 
 }  // namespace bayon

@@ -95,10 +95,24 @@ TEST(Dense, MastersByNameAndRefusals) {
 
   options.master_names = {"image_99.png"};
   EXPECT_THROW(SelectMasters(scene, options), InputError);
-  // 22.5 degrees between stations: none within 10.
+  // 22.5 degrees between stations: none within 10. The masters are chosen
+  // all the same, without search images; with none of them matchable,
+  // DenseReconstruct refuses and says why (it needs no image for that).
   options.master_names.clear();
   options.max_search_angle_deg = 10;
-  EXPECT_THROW(SelectMasters(scene, options), InputError);
+  const std::vector<MasterSelection> lonely = SelectMasters(scene, options);
+  ASSERT_EQ(lonely.size(), 5u);
+  for (const MasterSelection& selection : lonely) {
+    EXPECT_TRUE(selection.search.empty());
+  }
+  try {
+    DenseReconstruct(scene, {}, lonely, options, nullptr, nullptr);
+    ADD_FAILURE() << "no master can be matched";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("no other image within"),
+              std::string::npos)
+        << error.what();
+  }
   options = DenseOptions();
   options.cell_size = 0;
   EXPECT_THROW(SelectMasters(scene, options), InputError);
