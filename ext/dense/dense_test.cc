@@ -118,13 +118,19 @@ TEST(Dense, MastersByNameAndRefusals) {
   EXPECT_THROW(SelectMasters(scene, options), InputError);
 }
 
-TEST(Dense, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
-  const PlaneScene plane(2.0);
-  const Scene scene = plane.ToScene();
+// The plane scene's images as DenseReconstruct takes them (ids 1..5).
+std::map<image_t, DenseImage> GrayImages(const PlaneScene& plane) {
   std::map<image_t, DenseImage> images;
   for (size_t j = 0; j < plane.images.size(); ++j) {
     images[static_cast<image_t>(j + 1)].gray = plane.images[j];
   }
+  return images;
+}
+
+TEST(Dense, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
+  const PlaneScene plane(2.0);
+  const Scene scene = plane.ToScene();
+  const std::map<image_t, DenseImage> images = GrayImages(plane);
   DenseOptions options;
   options.num_threads = 2;
   // The orientation is exact: the collinearity conditions as good as hard.
@@ -198,10 +204,7 @@ TEST(Dense, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
 TEST(Dense, GrowthFillsTheCellsTheSearchLeftWithoutApproximation) {
   const PlaneScene plane(2.0);
   const Scene scene = plane.ToScene();
-  std::map<image_t, DenseImage> images;
-  for (size_t j = 0; j < plane.images.size(); ++j) {
-    images[static_cast<image_t>(j + 1)].gray = plane.images[j];
-  }
+  const std::map<image_t, DenseImage> images = GrayImages(plane);
   const std::vector<MasterSelection> masters = {{1, {2, 3, 4, 5}}};
   const double gsd = 4.0 / plane.camera.MeanFocalLengthPx();
   const auto run = [&](double min_peak_margin, int growth_passes) {
