@@ -600,6 +600,30 @@ void ForEachAcceptedAround(const std::vector<Cell>& cells,
   }
 }
 
+// The accepted cells within `radius` cells of `index`, the cell itself
+// left out: per neighbour its row (du, dv, 1/depth) relative to the cell's
+// pixel (for PlaneDepth), its depth and its object point.
+struct Neighbours {
+  std::vector<Eigen::Vector3d> rows_uvw;
+  std::vector<double> depths;
+  std::vector<Eigen::Vector3d> points;
+};
+
+Neighbours AcceptedNeighbours(
+    const std::vector<Cell>& cells, int cols, int rows, int index, int radius) {
+  const Cell& own = cells[index];
+  Neighbours found;
+  ForEachAcceptedAround(
+      cells, cols, rows, index, radius, [&](const Cell& cell) {
+        if (&cell == &own) return;
+        const Eigen::Vector2d d = cell.xy - own.xy;
+        found.rows_uvw.emplace_back(d.x(), d.y(), 1 / cell.depth);
+        found.depths.push_back(cell.depth);
+        found.points.push_back(cell.mpgc.xyz);
+      });
+  return found;
+}
+
 // The depth at a cell that the plane of inverse depth, linear in the
 // master's pixel coordinates, fitted to the chosen neighbours' rows
 // (du, dv, 1/depth) relative to the cell (with five or more, once more
@@ -673,20 +697,17 @@ DenseReject SurfaceVerdict(const std::vector<Cell>& cells,
                            double gsd_per_depth) {
   const Cell& own = cells[index];
   const double tolerance = options.off_surface_gsd * own.depth * gsd_per_depth;
-  std::vector<Eigen::Vector3d> rows_uvw;  // (du, dv, 1/depth)
-  std::vector<double> miss;               // |depth - own depth| / (1 + cells)
-  ForEachAcceptedAround(cells,
-                        cols,
-                        rows,
-                        index,
-                        options.surface_radius_cells,
-                        [&](const Cell& cell) {
-                          if (&cell == &own) return;
-                          const Eigen::Vector2d d = cell.xy - own.xy;
-                          rows_uvw.emplace_back(d.x(), d.y(), 1 / cell.depth);
-                          miss.push_back(std::abs(cell.depth - own.depth) /
-                                         (1 + d.norm() / options.cell_size));
-                        });
+  const Neighbours neighbours = AcceptedNeighbours(
+      cells, cols, rows, index, options.surface_radius_cells);
+  const std::vector<Eigen::Vector3d>& rows_uvw = neighbours.rows_uvw;
+  std::vector<double> miss;  // |depth - own depth| / (1 + cells)
+  for (size_t k = 0; k < rows_uvw.size(); ++k) {
+    const double cells_away =
+        Eigen::Vector2d(rows_uvw[k].x(), rows_uvw[k].y()).norm() /
+        options.cell_size;
+    miss.push_back(std::abs(neighbours.depths[k] - own.depth) /
+                   (1 + cells_away));
+  }
   if (static_cast<int>(rows_uvw.size()) < options.min_neighbors) {
     return DenseReject::kIsolated;
   }
@@ -859,27 +880,17 @@ void GrowSurface(const MpgcView& master,
       cell = cells[index];
       cell.mpgc = MpgcResult();
       cell.depth = std::numeric_limits<double>::quiet_NaN();
-      std::vector<Eigen::Vector3d> rows_uvw;
-      ForEachAcceptedAround(cells,
-                            cols,
-                            rows,
-                            index,
-                            options.surface_radius_cells,
-                            [&](const Cell& other) {
-                              const Eigen::Vector2d d = other.xy - cell.xy;
-                              rows_uvw.emplace_back(
-                                  d.x(), d.y(), 1 / other.depth);
-                            });
+      const Neighbours neighbours = AcceptedNeighbours(
+          cells, cols, rows, index, options.surface_radius_cells);
       const std::optional<double> depth =
-          PlaneDepth(rows_uvw, std::vector<bool>(rows_uvw.size(), true));
+          PlaneDepth(neighbours.rows_uvw,
+                     std::vector<bool>(neighbours.rows_uvw.size(), true));
       const auto ray = CellRay(master, &cell);
       if (!depth || !ray) return;
       const Eigen::Vector3d approximation =
           ray->first.origin + ray->first.direction * (*depth / ray->second);
       const std::optional<Eigen::Vector3d> normal = PlaneNormal(
-          AcceptedPointsAround(
-              cells, cols, rows, index, options.surface_radius_cells),
-          (master_centre - approximation).normalized());
+          neighbours.points, (master_centre - approximation).normalized());
       SolveCell(master,
                 search,
                 ray->first,
@@ -1070,12 +1081,13 @@ PointCloud DenseReconstruct(const Scene& scene,
     const Timer timer;
     const MasterSelection& selection = masters[m];
     const Image& master_image = scene.images.at(selection.master);
+    DenseMasterReport master_report;
+    master_report.master = selection.master;
+    master_report.name = master_image.name;
     if (!skipped[m].empty()) {
-      DenseMasterReport& master_report = report->masters.emplace_back();
-      master_report.master = selection.master;
-      master_report.name = master_image.name;
-      master_report.search = selection.search;
+      master_report.search = selection.search;  // those it would have had
       master_report.skipped = skipped[m];
+      report->masters.push_back(std::move(master_report));
       continue;
     }
     const MpgcView master = view_of(selection.master);
@@ -1162,9 +1174,6 @@ PointCloud DenseReconstruct(const Scene& scene,
       }
     }
 
-    DenseMasterReport master_report;
-    master_report.master = selection.master;
-    master_report.name = master_image.name;
     master_report.search = search_ids[m];
     master_report.min_depth = min_depth;
     master_report.max_depth = max_depth;

@@ -27,13 +27,21 @@ if [ ! -d "$chain_dir/temple/adjusted" ] ||
   bash "$(dirname "$0")/chain.sh" >/dev/null
 fi
 
+# synth_tower DIR [ARGS...]: the rendered tower (seed 2) in DIR/ws, made
+# once
+synth_tower() {
+  local into="$1"
+  shift
+  if [ ! -f "$into/ws/gt/synth.json" ]; then
+    rm -rf "$into"
+    mkdir -p "$into"
+    "$BAYON" synth --scene tower --output_path "$into/ws" --seed 2 \
+      --num_heldout_views 0 --num_threads "$threads" "$@" \
+      >"$into/synth.log" 2>&1
+  fi
+}
 tower="$dir/tower"
-if [ ! -f "$tower/ws/gt/synth.json" ]; then
-  rm -rf "$tower"
-  mkdir -p "$tower"
-  "$BAYON" synth --scene tower --output_path "$tower/ws" --seed 2 \
-    --num_heldout_views 0 --num_threads "$threads" >"$tower/synth.log" 2>&1
-fi
+synth_tower "$tower"
 # The true orientation with tie points, as an adjusted model would carry
 # them: bayon's features, matches and relative orientations, triangulated
 # by stock `colmap point_triangulator` into the true poses (the tower's own
@@ -78,13 +86,7 @@ evaluate tower "$tower/ws/gt"
 # first one's light (`synth --one_light 1`), with the same model: what the
 # changing light of the photographs costs.
 one_light="$dir/one_light"
-if [ ! -f "$one_light/ws/gt/synth.json" ]; then
-  rm -rf "$one_light"
-  mkdir -p "$one_light"
-  "$BAYON" synth --scene tower --output_path "$one_light/ws" --seed 2 \
-    --num_heldout_views 0 --one_light 1 --num_threads "$threads" \
-    >"$one_light/synth.log" 2>&1
-fi
+synth_tower "$one_light" --one_light 1
 rm -rf "$one_light/dense"
 dense one_light "$one_light/ws/images" "$tower/model"
 evaluate one_light "$one_light/ws/gt"
