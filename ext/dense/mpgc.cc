@@ -170,13 +170,57 @@ struct PatchState {
 
 // The normal equations of all observations at (xyz, patches); false where a
 // patch or projection fails (the culprit in *failed, -1 for the master).
+// The unknowns are X and per patch its eight parameters, which meet only
+// through X (a patch's collinearity condition ties its centre to X, its
+// grey values tie it to nothing else): the matrix is a block arrow, kept as
+// its blocks, and solved through the 3 x 3 Schur complement of X
+// (SolveSystem) instead of as one dense matrix of 3 + 8 x views unknowns.
 struct System {
-  Eigen::MatrixXd N;
-  Eigen::VectorXd rhs;
+  Eigen::Matrix3d N_xx = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs_x = Eigen::Vector3d::Zero();
+  std::vector<LsmMatrix> N_pp;                    // per patch
+  std::vector<Eigen::Matrix<double, 3, 2>> N_xc;  // X against (a0, b0)
+  std::vector<LsmVector> rhs_p;
   double cost = 0;  // v'Pv in grey values^2
   int num_observations = 0;
   double max_centre_error_px = 0;  // largest |collinearity condition|
 };
+
+// The solution (X first, then each patch's parameters) and the inverse of
+// the Schur complement of X, which is the X block of the inverse normal
+// matrix (X's cofactor matrix); false where a block is singular.
+bool SolveSystem(const System& system,
+                 Eigen::VectorXd* delta,
+                 Eigen::Matrix3d* xx_inverse) {
+  const size_t num_patches = system.N_pp.size();
+  Eigen::Matrix3d schur = system.N_xx;
+  Eigen::Vector3d reduced = system.rhs_x;
+  // Per patch N_pp^-1 N_px and N_pp^-1 rhs_p.
+  std::vector<Eigen::Matrix<double, kNumLsmParams, 3>> coupling(num_patches);
+  std::vector<LsmVector> own(num_patches);
+  for (size_t k = 0; k < num_patches; ++k) {
+    const Eigen::LDLT<LsmMatrix> ldlt(system.N_pp[k]);
+    if (ldlt.info() != Eigen::Success) return false;
+    Eigen::Matrix<double, kNumLsmParams, 3> N_px =
+        Eigen::Matrix<double, kNumLsmParams, 3>::Zero();
+    N_px.topRows<2>() = system.N_xc[k].transpose();
+    coupling[k] = ldlt.solve(N_px);
+    own[k] = ldlt.solve(system.rhs_p[k]);
+    schur -= system.N_xc[k] * coupling[k].topRows<2>();
+    reduced -= system.N_xc[k] * own[k].head<2>();
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(schur);
+  if (ldlt.info() != Eigen::Success) return false;
+  delta->resize(3 + kNumLsmParams * static_cast<int>(num_patches));
+  const Eigen::Vector3d delta_x = ldlt.solve(reduced);
+  delta->head<3>() = delta_x;
+  for (size_t k = 0; k < num_patches; ++k) {
+    delta->segment<kNumLsmParams>(3 + kNumLsmParams * static_cast<int>(k)) =
+        own[k] - coupling[k] * delta_x;
+  }
+  *xx_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
+  return delta->allFinite() && xx_inverse->allFinite();
+}
 
 bool BuildSystem(const MpgcView& master,
                  const Eigen::Vector2d& master_xy,
@@ -189,9 +233,12 @@ bool BuildSystem(const MpgcView& master,
                  std::vector<PatchState>* patches,
                  int* failed,
                  System* system) {
-  const int u = 3 + kNumLsmParams * static_cast<int>(patches->size());
-  system->N.setZero(u, u);
-  system->rhs.setZero(u);
+  const size_t num_patches = patches->size();
+  system->N_xx.setZero();
+  system->rhs_x.setZero();
+  system->N_pp.resize(num_patches);
+  system->N_xc.resize(num_patches);
+  system->rhs_p.resize(num_patches);
   system->cost = 0;
   system->num_observations = 0;
   system->max_centre_error_px = 0;
@@ -205,17 +252,16 @@ bool BuildSystem(const MpgcView& master,
       return false;
     }
     const Eigen::Vector2d c = projected - master_xy;
-    system->N.topLeftCorner<3, 3>() += weight * J.transpose() * J;
-    system->rhs.head<3>() -= weight * J.transpose() * c;
+    system->N_xx += weight * J.transpose() * J;
+    system->rhs_x -= weight * J.transpose() * c;
     system->cost += weight * c.squaredNorm();
     system->num_observations += 2;
     system->max_centre_error_px =
         std::max(system->max_centre_error_px, c.norm());
   }
-  for (size_t k = 0; k < patches->size(); ++k) {
+  for (size_t k = 0; k < num_patches; ++k) {
     PatchState& state = (*patches)[k];
     const MpgcView& view = search[state.view];
-    const int base = 3 + kNumLsmParams * static_cast<int>(k);
     if (!BuildLsmNormalEquations(patch,
                                  *view.image,
                                  state.params,
@@ -240,8 +286,10 @@ bool BuildSystem(const MpgcView& master,
     for (int p = 0; p < kNumLsmParams; ++p) state.active[p] = !held[p];
     // The geometry fixes what the texture leaves open.
     state.active[kLsmA0] = state.active[kLsmB0] = true;
-    LsmMatrix N = state.equations.N;
-    LsmVector rhs = state.equations.rhs;
+    LsmMatrix& N = system->N_pp[k];
+    LsmVector& rhs = system->rhs_p[k];
+    N = state.equations.N;
+    rhs = state.equations.rhs;
     for (int p = 0; p < kNumLsmParams; ++p) {
       if (state.active[p]) continue;
       N.row(p).setZero();
@@ -249,8 +297,6 @@ bool BuildSystem(const MpgcView& master,
       N(p, p) = 1;
       rhs(p) = 0;
     }
-    system->N.block<kNumLsmParams, kNumLsmParams>(base, base) += N;
-    system->rhs.segment<kNumLsmParams>(base) += rhs;
     system->cost += state.equations.residual_sq;
     system->num_observations += state.equations.num_observations;
     // Search image: (a0, b0) - P_j(X) = 0.
@@ -263,12 +309,11 @@ bool BuildSystem(const MpgcView& master,
     }
     const Eigen::Vector2d c = state.params.Position() - projected;
     // C = [dc/dX = -J | dc/d(a0, b0) = I].
-    system->N.topLeftCorner<3, 3>() += weight * J.transpose() * J;
-    system->N.block<3, 2>(0, base) -= weight * J.transpose();
-    system->N.block<2, 3>(base, 0) -= weight * J;
-    system->N.block<2, 2>(base, base) += weight * Eigen::Matrix2d::Identity();
-    system->rhs.head<3>() += weight * J.transpose() * c;
-    system->rhs.segment<2>(base) -= weight * c;
+    system->N_xx += weight * J.transpose() * J;
+    system->N_xc[k] = -weight * J.transpose();
+    N.topLeftCorner<2, 2>() += weight * Eigen::Matrix2d::Identity();
+    system->rhs_x += weight * J.transpose() * c;
+    rhs.head<2>() -= weight * c;
     system->cost += weight * c.squaredNorm();
     system->num_observations += 2;
     system->max_centre_error_px =
@@ -593,6 +638,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
     std::vector<LsmParameters> step_params(patches.size());
     double step_cost = std::numeric_limits<double>::infinity();
     Eigen::VectorXd delta;
+    Eigen::Matrix3d xx_inverse;
     const auto take = [&](const Eigen::VectorXd& step) {
       xyz = step_xyz + step.head<3>();
       for (size_t k = 0; k < patches.size(); ++k) {
@@ -628,13 +674,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
         step_params[k] = patches[k].params;
       }
       step_cost = system.cost;
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(system.N);
-      if (ldlt.info() != Eigen::Success) {
-        result.status = MpgcStatus::kSingular;
-        return result;
-      }
-      delta = ldlt.solve(system.rhs);
-      if (!delta.allFinite()) {
+      if (!SolveSystem(system, &delta, &xx_inverse)) {
         result.status = MpgcStatus::kSingular;
         return result;
       }
@@ -718,10 +758,14 @@ MpgcResult MatchMpgc(const MpgcView& master,
       r1_sq /= patches.size();
       result.sigma0 *= std::sqrt((1 + r1_sq) / (1 + r1_sq * kept));
     }
-    const Eigen::MatrixXd inverse = system.N.ldlt().solve(
-        Eigen::MatrixXd::Identity(system.N.rows(), system.N.cols()));
-    result.covariance =
-        result.sigma0 * result.sigma0 * inverse.topLeftCorner<3, 3>();
+    // At the last system built: the step from it was small, but it is the
+    // system of the parameters reported.
+    Eigen::VectorXd unused;
+    if (!SolveSystem(system, &unused, &xx_inverse)) {
+      result.status = MpgcStatus::kSingular;
+      return result;
+    }
+    result.covariance = result.sigma0 * result.sigma0 * xx_inverse;
     // The covariance above treats the grey residuals as independent. Where
     // they are not (shading the radiometric model cannot follow, blur that
     // differs between images: smooth residual fields), the patch carries

@@ -60,6 +60,14 @@ bool SampleImage(const cv::Mat& image,
                  Interpolation interpolation,
                  ImageSample* sample) {
   if (!InsideSampleFootprint(image, x, y)) return false;
+  if (interpolation == Interpolation::kBilinear) {
+    float noise_gain;
+    SampleBilinearInside(image, x, y, sample, &noise_gain);
+    return true;
+  }
+  // Cubic convolution of the values and of their central differences
+  // (which need one more pixel on each side: a 6 x 6 footprint).
+  if (!InsideBicubicGradientFootprint(image, x, y)) return false;
   const double u = x - 0.5;
   const double v = y - 0.5;
   const int ix = static_cast<int>(std::floor(u));
@@ -71,50 +79,27 @@ bool SampleImage(const cv::Mat& image,
   for (int k = 0; k < 4; ++k) {
     rows[k] = image.ptr<float>(iy - 1 + k) + (ix - 1);
   }
-  if (interpolation == Interpolation::kBicubic) {
-    // Cubic convolution of the values and of their central differences
-    // (which need one more pixel on each side: a 6 x 6 footprint).
-    if (!InsideBicubicGradientFootprint(image, x, y)) return false;
-    float wx[4], dwx[4], wy[4], dwy[4];
-    CubicWeights(fx, wx, dwx);
-    CubicWeights(fy, wy, dwy);
-    float value = 0, dx = 0, dy = 0;
-    for (int k = 0; k < 4; ++k) {
-      const float* r = rows[k];
-      const float* up = image.ptr<float>(iy - 2 + k) + (ix - 1);
-      const float* down = image.ptr<float>(iy + k) + (ix - 1);
-      float row_value = 0, row_dx = 0, row_dy = 0;
-      for (int c = 0; c < 4; ++c) {
-        row_value += wx[c] * r[c];
-        row_dx += wx[c] * 0.5f * (r[c + 1] - r[c - 1]);
-        row_dy += wx[c] * 0.5f * (down[c] - up[c]);
-      }
-      value += wy[k] * row_value;
-      dx += wy[k] * row_dx;
-      dy += wy[k] * row_dy;
+  float wx[4], dwx[4], wy[4], dwy[4];
+  CubicWeights(fx, wx, dwx);
+  CubicWeights(fy, wy, dwy);
+  float value = 0, dx = 0, dy = 0;
+  for (int k = 0; k < 4; ++k) {
+    const float* r = rows[k];
+    const float* up = image.ptr<float>(iy - 2 + k) + (ix - 1);
+    const float* down = image.ptr<float>(iy + k) + (ix - 1);
+    float row_value = 0, row_dx = 0, row_dy = 0;
+    for (int c = 0; c < 4; ++c) {
+      row_value += wx[c] * r[c];
+      row_dx += wx[c] * 0.5f * (r[c + 1] - r[c - 1]);
+      row_dy += wx[c] * 0.5f * (down[c] - up[c]);
     }
-    sample->value = value;
-    sample->dx = dx;
-    sample->dy = dy;
-    return true;
+    value += wy[k] * row_value;
+    dx += wy[k] * row_dx;
+    dy += wy[k] * row_dy;
   }
-  // Bilinear: the 2 x 2 pixels are rows[1..2][1..2].
-  const float w00 = (1 - fx) * (1 - fy);
-  const float w10 = fx * (1 - fy);
-  const float w01 = (1 - fx) * fy;
-  const float w11 = fx * fy;
-  sample->value =
-      w00 * rows[1][1] + w10 * rows[1][2] + w01 * rows[2][1] + w11 * rows[2][2];
-  auto gx = [&](int r, int c) {
-    return 0.5f * (rows[r][c + 1] - rows[r][c - 1]);
-  };
-  auto gy = [&](int r, int c) {
-    return 0.5f * (rows[r + 1][c] - rows[r - 1][c]);
-  };
-  sample->dx =
-      w00 * gx(1, 1) + w10 * gx(1, 2) + w01 * gx(2, 1) + w11 * gx(2, 2);
-  sample->dy =
-      w00 * gy(1, 1) + w10 * gy(1, 2) + w01 * gy(2, 1) + w11 * gy(2, 2);
+  sample->value = value;
+  sample->dx = dx;
+  sample->dy = dy;
   return true;
 }
 

@@ -62,6 +62,40 @@ inline bool InsideBicubicGradientFootprint(const cv::Mat& image,
   return u >= 2.0 && v >= 2.0 && u < image.cols - 3.0 && v < image.rows - 3.0;
 }
 
+// SampleImage's bilinear value and gradient at (x, y), where
+// InsideSampleFootprint holds (not tested here: a patch's loop tests its
+// corners once, the footprint's region being convex), and the noise gain
+// there (InterpolationNoiseGain).
+inline void SampleBilinearInside(const cv::Mat& image,
+                                 double x,
+                                 double y,
+                                 ImageSample* sample,
+                                 float* noise_gain) {
+  const double u = x - 0.5;
+  const double v = y - 0.5;
+  const int ix = static_cast<int>(u);  // u, v >= 1: truncation is floor
+  const int iy = static_cast<int>(v);
+  const float fx = static_cast<float>(u - ix);
+  const float fy = static_cast<float>(v - iy);
+  // The 4 x 4 pixels from (ix - 1, iy - 1); the 2 x 2 interpolated are
+  // rows 1..2, columns 1..2.
+  const float* r0 = image.ptr<float>(iy - 1) + (ix - 1);
+  const float* r1 = image.ptr<float>(iy) + (ix - 1);
+  const float* r2 = image.ptr<float>(iy + 1) + (ix - 1);
+  const float* r3 = image.ptr<float>(iy + 2) + (ix - 1);
+  const float w00 = (1 - fx) * (1 - fy);
+  const float w10 = fx * (1 - fy);
+  const float w01 = (1 - fx) * fy;
+  const float w11 = fx * fy;
+  sample->value = w00 * r1[1] + w10 * r1[2] + w01 * r2[1] + w11 * r2[2];
+  sample->dx = 0.5f * (w00 * (r1[2] - r1[0]) + w10 * (r1[3] - r1[1]) +
+                       w01 * (r2[2] - r2[0]) + w11 * (r2[3] - r2[1]));
+  sample->dy = 0.5f * (w00 * (r2[1] - r0[1]) + w10 * (r2[2] - r0[2]) +
+                       w01 * (r3[1] - r1[1]) + w11 * (r3[2] - r1[2]));
+  *noise_gain =
+      ((1 - fx) * (1 - fx) + fx * fx) * ((1 - fy) * (1 - fy) + fy * fy);
+}
+
 // The value and gradient at (x, y). Returns false (and leaves `sample`
 // unchanged) where the footprint leaves the image.
 bool SampleImage(const cv::Mat& image,

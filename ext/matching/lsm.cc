@@ -126,6 +126,32 @@ double CorrelationFromSums(double n,
 
 }  // namespace
 
+namespace {
+
+// Whether every sample of a patch of radius r under `affine` has its
+// bilinear footprint (InsideSampleFootprint) in the image: its four corner
+// samples have, with a margin against rounding (the region is convex and
+// holds the samples' convex hull). False also sends a patch near the border
+// to the per-sample test.
+bool BilinearPatchInside(const cv::Mat& image,
+                         const Eigen::Matrix<double, 2, 3>& affine,
+                         int r) {
+  constexpr double kMargin = 1e-6;
+  for (int v : {-r, r}) {
+    for (int u : {-r, r}) {
+      const double x = affine(0, 2) + affine(0, 0) * u + affine(0, 1) * v;
+      const double y = affine(1, 2) + affine(1, 0) * u + affine(1, 1) * v;
+      if (!InsideSampleFootprint(image, x - kMargin, y - kMargin) ||
+          !InsideSampleFootprint(image, x + kMargin, y + kMargin)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
 double LsmNormalEquations::Correlation() const {
   return CorrelationFromSums(
       num_observations, sum_f, sum_g, sum_ff, sum_gg, sum_fg);
@@ -138,14 +164,44 @@ bool LsmCorrelation(const LsmTemplate& patch,
                     double* correlation) {
   const int r = patch.radius;
   const auto& a = params.affine;
+  if (interpolation == Interpolation::kBilinear &&
+      BilinearPatchInside(search, a, r)) {
+    // The search along a ray calls this for every sample and view: values
+    // only, no test per sample, the template's sums known (its mean and
+    // contrast).
+    double sum_g = 0, sum_gg = 0, sum_fg = 0;
+    int k = 0;
+    for (int v = -r; v <= r; ++v) {
+      for (int u = -r; u <= r; ++u, ++k) {
+        const double x = a(0, 2) + a(0, 0) * u + a(0, 1) * v - 0.5;
+        const double y = a(1, 2) + a(1, 0) * u + a(1, 1) * v - 0.5;
+        const int ix = static_cast<int>(x);
+        const int iy = static_cast<int>(y);
+        const float fx = static_cast<float>(x - ix);
+        const float fy = static_cast<float>(y - iy);
+        const float* r0 = search.ptr<float>(iy) + ix;
+        const float* r1 = search.ptr<float>(iy + 1) + ix;
+        const float g = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
+                        fy * ((1 - fx) * r1[0] + fx * r1[1]);
+        sum_g += g;
+        sum_gg += static_cast<double>(g) * g;
+        sum_fg += (patch.values[k] - patch.mean) * g;
+      }
+    }
+    const double n = patch.size();
+    const double var_f = n * patch.stddev * patch.stddev;
+    const double var_g = sum_gg - sum_g * sum_g / n;
+    *correlation =
+        var_f > 0 && var_g > 0 ? sum_fg / std::sqrt(var_f * var_g) : 0;
+    return true;
+  }
   double sum_f = 0, sum_g = 0, sum_ff = 0, sum_gg = 0, sum_fg = 0;
   int k = 0;
   for (int v = -r; v <= r; ++v) {
     for (int u = -r; u <= r; ++u, ++k) {
       const double x = a(0, 2) + a(0, 0) * u + a(0, 1) * v;
       const double y = a(1, 2) + a(1, 0) * u + a(1, 1) * v;
-      // Values only: no gradients to interpolate (the search along a ray
-      // calls this for every sample and view).
+      // Values only: no gradients to interpolate.
       float value = 0;
       if (interpolation == Interpolation::kBilinear) {
         if (!SampleBilinear(search, x, y, &value)) return false;
@@ -175,32 +231,46 @@ bool BuildLsmNormalEquations(const LsmTemplate& patch,
                              LsmNormalEquations* equations) {
   const int r = patch.radius;
   const auto& a = params.affine;
-  // Accumulate the upper triangle of A'A in plain arrays (faster than a
-  // rank update per sample) and mirror it at the end.
+  // A sample's row of the design matrix is (gx, gy, gx u, gx v, gy u, gy v,
+  // 1, g). Along a patch row v is constant, so the row is c_i q_m(i) for the
+  // six values q = (gx, gy, gx u, gy u, 1, g), with c_i = v for the two
+  // entries in v and 1 otherwise: per sample the 21 products of q are
+  // summed (instead of 36 of the full row), and per patch row they are
+  // spread into A'A (upper triangle, plain arrays, mirrored at the end).
+  constexpr int kQ = 6;
+  constexpr int kFrom[kNumLsmParams] = {0, 1, 2, 0, 3, 1, 4, 5};
   double n_upper[kNumLsmParams][kNumLsmParams] = {};
   double rhs[kNumLsmParams] = {};
   double residual_sq = 0;
   double sum_f = 0, sum_g = 0, sum_ff = 0, sum_gg = 0, sum_fg = 0;
   double noise_gain_sum = 0;
+  // Bilinear patches away from the border: no test per sample.
+  const bool inside = interpolation == Interpolation::kBilinear &&
+                      BilinearPatchInside(search, a, r);
   int k = 0;
   for (int v = -r; v <= r; ++v) {
+    double q_upper[kQ][kQ] = {};
+    double q_rhs[kQ] = {};
     for (int u = -r; u <= r; ++u, ++k) {
       const double x = a(0, 2) + a(0, 0) * u + a(0, 1) * v;
       const double y = a(1, 2) + a(1, 0) * u + a(1, 1) * v;
       ImageSample sample;
-      if (!SampleImage(search, x, y, interpolation, &sample)) return false;
+      float noise_gain;
+      if (inside) {
+        SampleBilinearInside(search, x, y, &sample, &noise_gain);
+      } else {
+        if (!SampleImage(search, x, y, interpolation, &sample)) return false;
+        noise_gain = InterpolationNoiseGain(interpolation, x, y);
+      }
       const double f = patch.values[k];
       const double g = sample.value;
       const double gx = params.r1 * sample.dx;
       const double gy = params.r1 * sample.dy;
-      const double row[kNumLsmParams] = {
-          gx, gy, gx * u, gx * v, gy * u, gy * v, 1.0, g};
+      const double q[kQ] = {gx, gy, gx * u, gy * u, 1.0, g};
       const double l = f - params.r0 - params.r1 * g;
-      for (int i = 0; i < kNumLsmParams; ++i) {
-        for (int j = i; j < kNumLsmParams; ++j) {
-          n_upper[i][j] += row[i] * row[j];
-        }
-        rhs[i] += row[i] * l;
+      for (int i = 0; i < kQ; ++i) {
+        for (int j = i; j < kQ; ++j) q_upper[i][j] += q[i] * q[j];
+        q_rhs[i] += q[i] * l;
       }
       residual_sq += l * l;
       sum_f += f;
@@ -208,7 +278,16 @@ bool BuildLsmNormalEquations(const LsmTemplate& patch,
       sum_ff += f * f;
       sum_gg += g * g;
       sum_fg += f * g;
-      noise_gain_sum += InterpolationNoiseGain(interpolation, x, y);
+      noise_gain_sum += noise_gain;
+    }
+    const double c[kNumLsmParams] = {1, 1, 1, double(v), 1, double(v), 1, 1};
+    for (int i = 0; i < kNumLsmParams; ++i) {
+      for (int j = i; j < kNumLsmParams; ++j) {
+        const int qi = std::min(kFrom[i], kFrom[j]);
+        const int qj = std::max(kFrom[i], kFrom[j]);
+        n_upper[i][j] += c[i] * c[j] * q_upper[qi][qj];
+      }
+      rhs[i] += c[i] * q_rhs[kFrom[i]];
     }
   }
   for (int i = 0; i < kNumLsmParams; ++i) {
@@ -263,22 +342,48 @@ void LsmOptions::Check() const {
 
 namespace {
 
-// Conditional information of parameter j given the parameters in `taken`:
-// the Schur complement N_jj - N_jS N_SS^-1 N_Sj.
-double ConditionalInformation(const LsmMatrix& N,
-                              const std::vector<int>& taken,
-                              int j) {
-  if (taken.empty()) return N(j, j);
-  const int m = static_cast<int>(taken.size());
-  Eigen::MatrixXd nss(m, m);
-  Eigen::VectorXd nsj(m);
-  for (int a = 0; a < m; ++a) {
-    for (int b = 0; b < m; ++b) nss(a, b) = N(taken[a], taken[b]);
-    nsj[a] = N(taken[a], j);
+// The parameters taken so far as the Cholesky factor L of their normal
+// matrix N_SS (taken one at a time, so L grows by a row per parameter): the
+// conditional information of another parameter j, the Schur complement
+// N_jj - N_jS N_SS^-1 N_Sj, is N_jj - |y|^2 with L y = N_Sj, one forward
+// substitution instead of a factorisation per question. Every parameter is
+// taken with a positive conditional information, so L stays regular.
+class TakenParameters {
+ public:
+  explicit TakenParameters(const LsmMatrix& N) : N_(N) {}
+
+  double ConditionalInformation(int j, LsmVector* y) const {
+    double s = N_(j, j);
+    for (int a = 0; a < size_; ++a) {
+      double v = N_(index_[a], j);
+      for (int b = 0; b < a; ++b) v -= L_(a, b) * (*y)[b];
+      (*y)[a] = v / L_(a, a);
+      s -= (*y)[a] * (*y)[a];
+    }
+    return s;
   }
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(nss);
-  return N(j, j) - nsj.dot(ldlt.solve(nsj));
-}
+  double ConditionalInformation(int j) const {
+    LsmVector y;
+    return ConditionalInformation(j, &y);
+  }
+
+  // Takes j; false (and j not taken) where it adds no information.
+  bool Take(int j) {
+    LsmVector y;
+    const double s = ConditionalInformation(j, &y);
+    if (!(s > 0)) return false;
+    for (int b = 0; b < size_; ++b) L_(size_, b) = y[b];
+    L_(size_, size_) = std::sqrt(s);
+    index_[size_++] = j;
+    return true;
+  }
+
+ private:
+  const LsmMatrix& N_;
+  LsmMatrix L_ = LsmMatrix::Zero();
+  std::array<int, kNumLsmParams> index_{};
+  int size_ = 0;
+};
 
 std::vector<int> FreeIndices(const std::array<bool, kNumLsmParams>& held) {
   std::vector<int> free;
@@ -297,19 +402,19 @@ std::array<bool, kNumLsmParams> SelectLsmParameters(
   // Radiometry in centred form, r1 against g - mean(g): whether the scale is
   // determinable must not depend on how bright the patch is. The column of
   // r0 is all ones, so N(r0, r0) = n and N(r0, r1) = sum g.
+  // That is N = T' N T with T the identity but T(r0, r1) = -mean(g): the
+  // column of r1, then its row, less mean(g) times r0's.
   LsmMatrix N = N_in;
   if (N(kLsmR0, kLsmR0) > 0) {
     const double mean_g = N(kLsmR0, kLsmR1) / N(kLsmR0, kLsmR0);
-    LsmMatrix T = LsmMatrix::Identity();
-    T(kLsmR0, kLsmR1) = -mean_g;
-    N = T.transpose() * N * T;
+    N.col(kLsmR1) -= mean_g * N.col(kLsmR0);
+    N.row(kLsmR1) -= mean_g * N.row(kLsmR0);
   }
   std::array<bool, kNumLsmParams> held;
   held.fill(true);
-  std::vector<int> taken;
+  TakenParameters taken(N);
   auto accept = [&](int j) {
-    held[j] = false;
-    taken.push_back(j);
+    if (taken.Take(j)) held[j] = false;
   };
   // Shifts: the better determined first, the other one only if it carries
   // enough information of its own.
@@ -318,7 +423,7 @@ std::array<bool, kNumLsmParams> SelectLsmParameters(
   if (enabled[first] && N(first, first) > 0) {
     accept(first);
     if (enabled[second]) {
-      const double s = ConditionalInformation(N, taken, second);
+      const double s = taken.ConditionalInformation(second);
       if (s >= options.min_shift_information_ratio * N(first, first)) {
         accept(second);
       }
@@ -328,7 +433,7 @@ std::array<bool, kNumLsmParams> SelectLsmParameters(
   }
   for (int j : {kLsmR0, kLsmR1, kLsmA1, kLsmB2, kLsmA2, kLsmB1}) {
     if (!enabled[j] || !(N(j, j) > 0)) continue;
-    const double s = ConditionalInformation(N, taken, j);
+    const double s = taken.ConditionalInformation(j);
     if (s > options.min_pivot * N(j, j)) accept(j);
   }
   return held;

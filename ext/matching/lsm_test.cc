@@ -332,6 +332,58 @@ TEST(Lsm, NormalEquationsMatchFiniteDifferences) {
   }
 }
 
+TEST(Lsm, NormalEquationsAreTheDesignMatrixSquared) {
+  // N = A'A and rhs = A'l with A's rows (gx, gy, gx u, gx v, gy u, gy v, 1,
+  // g) sampled one at a time, for a sheared patch in the middle of a noise
+  // image and one whose corner is half a pixel from where the bilinear
+  // footprint ends (the bicubic one is out there), with both
+  // interpolations.
+  cv::Mat f(kImageSize, kImageSize, CV_32F), g(kImageSize, kImageSize, CV_32F);
+  cv::randu(f, 0, 255);
+  cv::randu(g, 0, 255);
+  const int radius = 4;
+  LsmTemplate patch;
+  ASSERT_TRUE(ExtractLsmTemplate(
+      f, kTemplateXY, radius, Interpolation::kBilinear, &patch));
+  const Eigen::Matrix2d shape =
+      (Eigen::Matrix2d() << 1.1, 0.2, -0.15, 0.9).finished();
+  for (Interpolation interpolation :
+       {Interpolation::kBilinear, Interpolation::kBicubic}) {
+    for (const Eigen::Vector2d& centre :
+         {Eigen::Vector2d(20.3, 19.6), Eigen::Vector2d(7.2, 30.2)}) {
+      LsmParameters params = LsmParameters::At(centre, shape);
+      params.r0 = 4;
+      params.r1 = 0.8;
+      LsmNormalEquations equations;
+      if (!BuildLsmNormalEquations(
+              patch, g, params, interpolation, &equations)) {
+        // Only the bicubic footprint leaves the image at the border.
+        EXPECT_EQ(interpolation, Interpolation::kBicubic);
+        continue;
+      }
+      LsmMatrix N = LsmMatrix::Zero();
+      LsmVector rhs = LsmVector::Zero();
+      int k = 0;
+      for (int v = -radius; v <= radius; ++v) {
+        for (int u = -radius; u <= radius; ++u, ++k) {
+          const Eigen::Vector2d xy = params.affine * Eigen::Vector3d(u, v, 1);
+          ImageSample sample;
+          ASSERT_TRUE(SampleImage(g, xy.x(), xy.y(), interpolation, &sample));
+          const double gx = params.r1 * sample.dx, gy = params.r1 * sample.dy;
+          LsmVector row;
+          row << gx, gy, gx * u, gx * v, gy * u, gy * v, 1, sample.value;
+          N += row * row.transpose();
+          rhs += row * (patch.values[k] - params.r0 - params.r1 * sample.value);
+        }
+      }
+      EXPECT_LT((equations.N - N).norm(), 1e-9 * N.norm())
+          << InterpolationName(interpolation) << " at " << centre.transpose();
+      EXPECT_LT((equations.rhs - rhs).norm(), 1e-9 * rhs.norm())
+          << InterpolationName(interpolation) << " at " << centre.transpose();
+    }
+  }
+}
+
 TEST(Lsm, OneTemplateAgainstSeveralSearchPatches) {
   // One template, three search images with different shapes, radiometry
   // and one search patch off its image: each solution is independent, the
