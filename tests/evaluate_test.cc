@@ -139,6 +139,16 @@ TEST(Evaluate, NoisyCloudAndDegradedTexture) {
   EXPECT_NEAR(c["accuracy_m"]["rms"].get<double>(), 0.004, 0.0006);
   EXPECT_GT(c["completeness_fraction"].get<double>(), 0.97);
   EXPECT_GT(c["accuracy_gsd"]["rms"].get<double>(), 0.0);
+  // The tower's walls and tops (the cloud covers the whole surface).
+  size_t by_orientation = 0;
+  for (const char* part : {"walls", "tops", "undersides"}) {
+    const auto& o = c["completeness_by_orientation"][part];
+    by_orientation += o["num_visible_true_samples"].get<size_t>();
+    if (std::string(part) != "undersides") {
+      EXPECT_GT(o["completeness_fraction"].get<double>(), 0.95) << part;
+    }
+  }
+  EXPECT_EQ(by_orientation, c["num_visible_true_samples"].get<size_t>());
   const double psnr = report["texture"]["mean_psnr_db"];
   const double ssim = report["texture"]["mean_ssim"];
   EXPECT_LT(psnr, 45.0);

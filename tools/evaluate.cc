@@ -117,6 +117,14 @@ Json SurfaceToJson(const SurfaceEvaluation& e) {
                {"completeness_fraction", e.completeness_fraction},
                {"completeness_threshold_m", e.completeness_threshold_m},
                {"num_visible_true_samples", e.num_visible_samples}};
+  Json by_orientation = Json::object();
+  for (int o = 0; o < kNumSurfaceOrientations; ++o) {
+    const OrientationCompleteness& c = e.completeness_by_orientation[o];
+    by_orientation[SurfaceOrientationName(static_cast<SurfaceOrientation>(o))] =
+        {{"num_visible_true_samples", c.num_samples},
+         {"completeness_fraction", c.fraction}};
+  }
+  json["completeness_by_orientation"] = by_orientation;
   if (e.gsd_m > 0) {
     json["gsd_m"] = e.gsd_m;
     json["accuracy_gsd"] = {{"mean", e.accuracy.mean / e.gsd_m},

@@ -81,12 +81,25 @@ std::vector<double> SampleToPointDistances(
 }
 
 void FillCompleteness(std::vector<double> distances,
+                      const VisibleSurface& visible,
                       const SurfaceEvaluationOptions& options,
                       SurfaceEvaluation* evaluation) {
-  const size_t reached = static_cast<size_t>(
-      std::count_if(distances.begin(), distances.end(), [&](double d) {
-        return d <= options.completeness_threshold_m;
-      }));
+  size_t reached = 0;
+  std::array<size_t, kNumSurfaceOrientations> reached_by{};
+  auto& by_orientation = evaluation->completeness_by_orientation;
+  for (size_t i = 0; i < distances.size(); ++i) {
+    const bool hit = distances[i] <= options.completeness_threshold_m;
+    reached += hit;
+    const int o = static_cast<int>(OrientationOf(visible.normals[i]));
+    ++by_orientation[o].num_samples;
+    reached_by[o] += hit;
+  }
+  for (int o = 0; o < kNumSurfaceOrientations; ++o) {
+    if (by_orientation[o].num_samples > 0) {
+      by_orientation[o].fraction =
+          double(reached_by[o]) / by_orientation[o].num_samples;
+    }
+  }
   evaluation->num_visible_samples = distances.size();
   evaluation->completeness_fraction =
       distances.empty() ? 0.0 : double(reached) / distances.size();
@@ -106,6 +119,25 @@ void CheckOptions(const SurfaceEvaluationOptions& options,
 
 }  // namespace
 
+const char* SurfaceOrientationName(SurfaceOrientation orientation) {
+  switch (orientation) {
+    case SurfaceOrientation::kWalls:
+      return "walls";
+    case SurfaceOrientation::kTops:
+      return "tops";
+    case SurfaceOrientation::kUndersides:
+      return "undersides";
+  }
+  return "?";
+}
+
+SurfaceOrientation OrientationOf(const Eigen::Vector3d& normal) {
+  const double cos45 = std::sqrt(0.5);
+  if (normal.z() > cos45) return SurfaceOrientation::kTops;
+  if (normal.z() < -cos45) return SurfaceOrientation::kUndersides;
+  return SurfaceOrientation::kWalls;
+}
+
 VisibleSurface FindVisibleSurface(const TriangleMesh& surface,
                                   const Scene& cameras,
                                   const VisibleSurfaceOptions& options) {
@@ -118,11 +150,12 @@ VisibleSurface FindVisibleSurface(const TriangleMesh& surface,
         "tolerance");
   }
   VisibleSurface visible;
-  std::vector<Eigen::Vector3d> candidates;
+  std::vector<Eigen::Vector3d> candidates, normals;
   for (const SurfaceSample& sample :
        SampleMeshSurface(surface, options.num_samples, options.seed)) {
     if (Inside(options.region, sample.position)) {
       candidates.push_back(sample.position);
+      normals.push_back(FaceNormal(surface, sample.face));
     }
   }
   visible.num_candidates = candidates.size();
@@ -169,7 +202,10 @@ VisibleSurface FindVisibleSurface(const TriangleMesh& surface,
         });
   }
   for (size_t i = 0; i < candidates.size(); ++i) {
-    if (views[i] >= options.min_views) visible.samples.push_back(candidates[i]);
+    if (views[i] >= options.min_views) {
+      visible.samples.push_back(candidates[i]);
+      visible.normals.push_back(normals[i]);
+    }
   }
   if (visible.samples.empty()) {
     ThrowInputError("no sample of the true surface is seen in ",
@@ -205,6 +241,7 @@ SurfaceEvaluation EvaluateCloud(const PointCloud& cloud,
                                           judged,
                                           10 * options.completeness_threshold_m,
                                           options.num_threads),
+                   visible,
                    options,
                    &evaluation);
   return evaluation;
@@ -241,6 +278,7 @@ SurfaceEvaluation EvaluateMesh(const TriangleMesh& mesh,
       ComputeDistanceStatistics(truth.Distances(judged, options.num_threads));
   const MeshDistance to_mesh(mesh);
   FillCompleteness(to_mesh.Distances(visible.samples, options.num_threads),
+                   visible,
                    options,
                    &evaluation);
   return evaluation;
@@ -289,6 +327,18 @@ std::string SurfaceTableRow(const std::string& label,
                   e.accuracy.p95 / e.gsd_m,
                   "",
                   e.completeness_threshold_m / e.gsd_m);
+    row += line;
+  }
+  row += "\n  complete by orientation:";
+  for (int o = 0; o < kNumSurfaceOrientations; ++o) {
+    const OrientationCompleteness& c = e.completeness_by_orientation[o];
+    std::snprintf(line,
+                  sizeof(line),
+                  "%s %s %.1f%% (%zu samples)",
+                  o == 0 ? "" : ",",
+                  SurfaceOrientationName(static_cast<SurfaceOrientation>(o)),
+                  100.0 * c.fraction,
+                  c.num_samples);
     row += line;
   }
   return row;

@@ -23,6 +23,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,7 @@ struct VisibleSurfaceOptions {
 
 struct VisibleSurface {
   std::vector<Eigen::Vector3d> samples;  // the visible ones
+  std::vector<Eigen::Vector3d> normals;  // of the true faces they lie on
   size_t num_candidates = 0;             // samples inside the region
   double area = 0;                       // of the whole true surface
 };
@@ -54,6 +56,21 @@ struct VisibleSurface {
 VisibleSurface FindVisibleSurface(const TriangleMesh& surface,
                                   const Scene& cameras,
                                   const VisibleSurfaceOptions& options = {});
+
+// The true surface by its orientation to the datum's vertical (z): tops
+// (normals within 45 degrees of up), undersides (of down), walls (the rest).
+// A ring of photographs taken from about the ground sees walls face on and
+// tops, if at all, at grazing angles, where a dense pattern of image cells
+// samples them sparsely: completeness per orientation says which.
+enum class SurfaceOrientation { kWalls = 0, kTops, kUndersides };
+constexpr int kNumSurfaceOrientations = 3;
+const char* SurfaceOrientationName(SurfaceOrientation orientation);
+SurfaceOrientation OrientationOf(const Eigen::Vector3d& normal);
+
+struct OrientationCompleteness {
+  size_t num_samples = 0;  // visible true samples of this orientation
+  double fraction = 0;     // of them within the completeness threshold
+};
 
 struct SurfaceEvaluationOptions {
   // A true sample counts as reached when the reconstruction comes within
@@ -77,6 +94,9 @@ struct SurfaceEvaluation {
   DistanceStatistics completeness;  // visible truth -> reconstruction
   // Share of the visible true samples within the completeness threshold.
   double completeness_fraction = 0;
+  // The same per orientation of the true surface (SurfaceOrientation).
+  std::array<OrientationCompleteness, kNumSurfaceOrientations>
+      completeness_by_orientation{};
   double completeness_threshold_m = 0;
   double gsd_m = 0;
   size_t num_visible_samples = 0;

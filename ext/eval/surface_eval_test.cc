@@ -109,6 +109,49 @@ TEST(SurfaceEval, NoisyCloudHasItsNoiseAsAccuracyAndIsComplete) {
   EXPECT_NEAR(h.completeness.max, 0.2, 1e-12);
 }
 
+TEST(SurfaceEval, CompletenessPerOrientationOfTheTrueSurface) {
+  // A cloud on the torus's walls alone (normals within 45 degrees of
+  // horizontal) reaches the walls and, of the tops, only a rim next to them.
+  const VisibleSurface& visible = Visible();
+  ASSERT_EQ(visible.normals.size(), visible.samples.size());
+  const MeshDistance truth(Scene0().surface);
+  NoisyCloudOptions noise;
+  noise.num_points = 200000;
+  noise.sigma_m = 0;
+  noise.blunder_fraction = 0;
+  PointCloud cloud = SampleNoisyCloud(Scene0().surface, noise);
+  std::vector<bool> keep(cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    keep[i] = OrientationOf(FaceNormal(
+                  Scene0().surface, truth.Closest(cloud.positions[i]).face)) ==
+              SurfaceOrientation::kWalls;
+  }
+  cloud.Filter(keep);
+  SurfaceEvaluationOptions options;
+  options.completeness_threshold_m = 0.02;
+  const SurfaceEvaluation e = EvaluateCloud(cloud, truth, visible, options);
+  const auto& walls =
+      e.completeness_by_orientation[int(SurfaceOrientation::kWalls)];
+  const auto& tops =
+      e.completeness_by_orientation[int(SurfaceOrientation::kTops)];
+  const auto& undersides =
+      e.completeness_by_orientation[int(SurfaceOrientation::kUndersides)];
+  EXPECT_EQ(walls.num_samples + tops.num_samples + undersides.num_samples,
+            e.num_visible_samples);
+  // The cameras, 3 m up, see the torus's top and outer side.
+  EXPECT_GT(tops.num_samples, e.num_visible_samples / 4);
+  EXPECT_GT(walls.num_samples, e.num_visible_samples / 4);
+  EXPECT_GT(walls.fraction, 0.99);
+  EXPECT_LT(tops.fraction, 0.2);
+  EXPECT_NEAR(
+      e.completeness_fraction,
+      (walls.fraction * walls.num_samples + tops.fraction * tops.num_samples +
+       undersides.fraction * undersides.num_samples) /
+          e.num_visible_samples,
+      1e-12);
+  EXPECT_NE(SurfaceTableRow("cloud", e).find("walls"), std::string::npos);
+}
+
 TEST(SurfaceEval, TheTruthAsAMeshIsExactClosedAndComplete) {
   const VisibleSurface& visible = Visible();
   const MeshDistance truth(Scene0().surface);

@@ -666,8 +666,10 @@ Section EvaluationSection(const Workspace& ws, Page* page) {
                       "Accuracy median",
                       "RMS",
                       "95 %",
-                      "Completeness"},
-                     "lrrrrr");
+                      "Completeness",
+                      "walls",
+                      "tops"},
+                     "lrrrrrrr");
   for (const char* key : {"cloud", "mesh"}) {
     const Json& s = Child(e, key);
     if (!s.is_object()) continue;
@@ -678,12 +680,21 @@ Section EvaluationSection(const Workspace& ws, Page* page) {
       return in_gsd ? FormatFixed(Number(gsd, stat), 2) + " GSD"
                     : FormatSignificant(Number(metres, stat), 3);
     };
+    // Completeness of the true surface facing sideways and up.
+    const auto orientation = [&](const char* part) {
+      return FormatPercent(
+          Number(Child(Child(s, "completeness_by_orientation"), part),
+                 "completeness_fraction"),
+          1);
+    };
     surfaces.AddRow({key,
                      CountOf(s, "num_points"),
                      value("median"),
                      value("rms"),
                      value("p95"),
-                     FormatPercent(Number(s, "completeness_fraction"), 1)});
+                     FormatPercent(Number(s, "completeness_fraction"), 1),
+                     orientation("walls"),
+                     orientation("tops")});
   }
   if (!surfaces.empty()) {
     section.html += "<h3>Surfaces</h3>" + surfaces.Html();

@@ -7,6 +7,7 @@
 #             `bayon evaluate` against the true surface
 #             (completeness within 5 GSD: the dense pattern's 7-pixel cells
 #             leave points about 5 pixels apart at most)
+#   tower_16  the same with all 16 photographs as masters
 #   one_light the same tower with every photograph in the first one's
 #             light (`synth --one_light 1`), the same model: a control for
 #             what the photographs' changing sun costs
@@ -82,6 +83,10 @@ evaluate() {
 }
 dense tower "$tower/ws/images" "$tower/model"
 evaluate tower "$tower/ws/gt"
+# Every photograph a master: how the points grow with the masters (the
+# issue's figure is for 5).
+dense tower_16 "$tower/ws/images" "$tower/model" --num_masters 16
+evaluate tower_16 "$tower/ws/gt"
 # The control: the same tower, stations and noise, every photograph in the
 # first one's light (`synth --one_light 1`), with the same model: what the
 # changing light of the photographs costs.
@@ -94,37 +99,46 @@ dense temple "$BAYON_DATA_DIR/temple-ring" "$chain_dir/temple/adjusted"
 dense fountain "$BAYON_DATA_DIR/fountain-P11/images" \
   "$chain_dir/fountain/adjusted"
 
-printf '\n%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s\n' set cells points \
-  time "cells/s" "points/s" peak "acc med" "acc RMS" "acc p95" complete
-printf '%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s\n' "" "" "" s "" "" MB \
-  GSD GSD GSD "5 GSD"
-for name in tower one_light temple fountain; do
+printf '\n%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s\n' set cells \
+  points time "cells/s" "points/s" peak "acc med" "acc RMS" "acc p95" complete \
+  walls tops
+printf '%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s\n' "" "" "" s "" "" \
+  MB GSD GSD GSD "5 GSD" "5 GSD" "5 GSD"
+for name in tower tower_16 one_light temple fountain; do
   read -r cells points < <(python3 -c '
 import json, sys
 r = json.load(open(sys.argv[1]))
 print(r["num_cells"], r["num_points"])' "$dir/$name/dense/points.json")
   t=$(wall_s "$dir/$name/dense")
   m=$(peak_mb "$dir/$name/dense")
-  accuracy="- - - -"
+  accuracy="- - - - - -"
   if [ -f "$dir/$name/evaluation.json" ]; then
     accuracy=$(python3 -c '
 import json, sys
 c = json.load(open(sys.argv[1]))["cloud"]
 a = c["accuracy_gsd"]
-print("%.2f %.2f %.2f %.1f%%" % (a["median"], a["rms"], a["p95"],
-                                  100 * c["completeness_fraction"]))' \
+o = c["completeness_by_orientation"]
+print("%.2f %.2f %.2f %.1f%% %.1f%% %.1f%%" % (
+    a["median"], a["rms"], a["p95"], 100 * c["completeness_fraction"],
+    100 * o["walls"]["completeness_fraction"],
+    100 * o["tops"]["completeness_fraction"]))' \
       "$dir/$name/evaluation.json")
   fi
-  read -r med rms p95 complete <<<"$accuracy"
+  read -r med rms p95 complete walls tops <<<"$accuracy"
   awk -v n="$name" -v c="$cells" -v p="$points" -v t="$t" -v m="$m" \
-    -v a="$med" -v r="$rms" -v q="$p95" -v k="$complete" 'BEGIN {
-      printf "%-9s %8d %8d %8.1f %8.0f %9.0f %9d %7s %9s %9s %9s\n",
-        n, c, p, t, c / t, p / t, m, a, r, q, k }'
+    -v a="$med" -v r="$rms" -v q="$p95" -v k="$complete" -v w="$walls" \
+    -v u="$tops" 'BEGIN {
+      printf "%-9s %8d %8d %8.1f %8.0f %9.0f %9d %7s %9s %9s %9s %7s %7s\n",
+        n, c, p, t, c / t, p / t, m, a, r, q, k, w, u }'
 done
 echo
 echo "cells: the dense pattern's cells in all masters (each tried: textured"
 echo "ones matched, the rest rejected at once); points: those accepted."
-echo "tower: true orientation with triangulated tie points; one_light: the"
+echo "tower: true orientation with triangulated tie points, 5 masters; tower_16:"
+echo "the same, every photograph a master; one_light: the"
 echo "same tower photographed in one light (synth --one_light 1); temple, fountain:"
 echo "bayon's own orientation (chain.sh)."
+echo "complete: share of the true surface seen in 2 or more photographs within 5"
+echo "GSD of a point; walls, tops: the same for the surface facing sideways and"
+echo "up (normals within 45 degrees of horizontal, of up; bayon evaluate)."
 echo "Threads: $threads. Reject reasons per master: build/bench/dense/*/dense/points.json"
