@@ -109,6 +109,19 @@ bool SampleImage(const cv::Mat& image,
 // centres, down to 0.25 for bilinear midway between four pixels).
 double InterpolationNoiseGain(Interpolation interpolation, double x, double y);
 
+// The value alone by bilinear interpolation at (u, v) = (x - 0.5, y - 0.5)
+// where its 2 x 2 footprint lies in the image (not tested here).
+inline float BilinearValueInside(const cv::Mat& image, double u, double v) {
+  const int ix = static_cast<int>(u);  // u, v >= 0: truncation is floor
+  const int iy = static_cast<int>(v);
+  const float fx = static_cast<float>(u - ix);
+  const float fy = static_cast<float>(v - iy);
+  const float* r0 = image.ptr<float>(iy) + ix;
+  const float* r1 = image.ptr<float>(iy + 1) + ix;
+  return (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
+         fy * ((1 - fx) * r1[0] + fx * r1[1]);
+}
+
 // The value alone by bilinear interpolation (2 x 2 footprint: x - 0.5 in
 // [0, width - 1), likewise y). Returns false outside.
 inline bool SampleBilinear(const cv::Mat& image,
@@ -120,14 +133,7 @@ inline bool SampleBilinear(const cv::Mat& image,
   if (!(u >= 0.0 && v >= 0.0 && u < image.cols - 1.0 && v < image.rows - 1.0)) {
     return false;
   }
-  const int ix = static_cast<int>(u);
-  const int iy = static_cast<int>(v);
-  const float fx = static_cast<float>(u - ix);
-  const float fy = static_cast<float>(v - iy);
-  const float* r0 = image.ptr<float>(iy) + ix;
-  const float* r1 = image.ptr<float>(iy + 1) + ix;
-  *value = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
-           fy * ((1 - fx) * r1[0] + fx * r1[1]);
+  *value = BilinearValueInside(image, u, v);
   return true;
 }
 

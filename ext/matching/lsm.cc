@@ -173,16 +173,10 @@ bool LsmCorrelation(const LsmTemplate& patch,
     int k = 0;
     for (int v = -r; v <= r; ++v) {
       for (int u = -r; u <= r; ++u, ++k) {
-        const double x = a(0, 2) + a(0, 0) * u + a(0, 1) * v - 0.5;
-        const double y = a(1, 2) + a(1, 0) * u + a(1, 1) * v - 0.5;
-        const int ix = static_cast<int>(x);
-        const int iy = static_cast<int>(y);
-        const float fx = static_cast<float>(x - ix);
-        const float fy = static_cast<float>(y - iy);
-        const float* r0 = search.ptr<float>(iy) + ix;
-        const float* r1 = search.ptr<float>(iy + 1) + ix;
-        const float g = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
-                        fy * ((1 - fx) * r1[0] + fx * r1[1]);
+        const float g =
+            BilinearValueInside(search,
+                                a(0, 2) + a(0, 0) * u + a(0, 1) * v - 0.5,
+                                a(1, 2) + a(1, 0) * u + a(1, 1) * v - 0.5);
         sum_g += g;
         sum_gg += static_cast<double>(g) * g;
         sum_fg += (patch.values[k] - patch.mean) * g;
