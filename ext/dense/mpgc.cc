@@ -186,12 +186,13 @@ struct System {
   double max_centre_error_px = 0;  // largest |collinearity condition|
 };
 
-// The solution (X first, then each patch's parameters) and the inverse of
-// the Schur complement of X, which is the X block of the inverse normal
-// matrix (X's cofactor matrix); false where a block is singular.
+// The solution (X first, then each patch's parameters) and, where asked
+// for, the inverse of the Schur complement of X, which is the X block of the
+// inverse normal matrix (X's cofactor matrix); false where a block is
+// singular.
 bool SolveSystem(const System& system,
                  Eigen::VectorXd* delta,
-                 Eigen::Matrix3d* xx_inverse) {
+                 Eigen::Matrix3d* xx_inverse = nullptr) {
   const size_t num_patches = system.N_pp.size();
   Eigen::Matrix3d schur = system.N_xx;
   Eigen::Vector3d reduced = system.rhs_x;
@@ -218,8 +219,10 @@ bool SolveSystem(const System& system,
     delta->segment<kNumLsmParams>(3 + kNumLsmParams * static_cast<int>(k)) =
         own[k] - coupling[k] * delta_x;
   }
+  if (!delta->allFinite()) return false;
+  if (xx_inverse == nullptr) return true;
   *xx_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
-  return delta->allFinite() && xx_inverse->allFinite();
+  return xx_inverse->allFinite();
 }
 
 bool BuildSystem(const MpgcView& master,
@@ -638,7 +641,6 @@ MpgcResult MatchMpgc(const MpgcView& master,
     std::vector<LsmParameters> step_params(patches.size());
     double step_cost = std::numeric_limits<double>::infinity();
     Eigen::VectorXd delta;
-    Eigen::Matrix3d xx_inverse;
     const auto take = [&](const Eigen::VectorXd& step) {
       xyz = step_xyz + step.head<3>();
       for (size_t k = 0; k < patches.size(); ++k) {
@@ -674,7 +676,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
         step_params[k] = patches[k].params;
       }
       step_cost = system.cost;
-      if (!SolveSystem(system, &delta, &xx_inverse)) {
+      if (!SolveSystem(system, &delta)) {
         result.status = MpgcStatus::kSingular;
         return result;
       }
@@ -761,6 +763,7 @@ MpgcResult MatchMpgc(const MpgcView& master,
     // At the last system built: the step from it was small, but it is the
     // system of the parameters reported.
     Eigen::VectorXd unused;
+    Eigen::Matrix3d xx_inverse;
     if (!SolveSystem(system, &unused, &xx_inverse)) {
       result.status = MpgcStatus::kSingular;
       return result;

@@ -84,17 +84,16 @@ void FillCompleteness(std::vector<double> distances,
                       const VisibleSurface& visible,
                       const SurfaceEvaluationOptions& options,
                       SurfaceEvaluation* evaluation) {
-  size_t reached = 0;
   std::array<size_t, kNumSurfaceOrientations> reached_by{};
   auto& by_orientation = evaluation->completeness_by_orientation;
   for (size_t i = 0; i < distances.size(); ++i) {
-    const bool hit = distances[i] <= options.completeness_threshold_m;
-    reached += hit;
     const int o = static_cast<int>(OrientationOf(visible.normals[i]));
     ++by_orientation[o].num_samples;
-    reached_by[o] += hit;
+    reached_by[o] += distances[i] <= options.completeness_threshold_m;
   }
+  size_t reached = 0;
   for (int o = 0; o < kNumSurfaceOrientations; ++o) {
+    reached += reached_by[o];
     if (by_orientation[o].num_samples > 0) {
       by_orientation[o].fraction =
           double(reached_by[o]) / by_orientation[o].num_samples;

@@ -61,8 +61,7 @@ bool SampleImage(const cv::Mat& image,
                  ImageSample* sample) {
   if (!InsideSampleFootprint(image, x, y)) return false;
   if (interpolation == Interpolation::kBilinear) {
-    float noise_gain;
-    SampleBilinearInside(image, x, y, sample, &noise_gain);
+    SampleBilinearInside(image, x, y, sample);
     return true;
   }
   // Cubic convolution of the values and of their central differences

@@ -64,13 +64,13 @@ inline bool InsideBicubicGradientFootprint(const cv::Mat& image,
 
 // SampleImage's bilinear value and gradient at (x, y), where
 // InsideSampleFootprint holds (not tested here: a patch's loop tests its
-// corners once, the footprint's region being convex), and the noise gain
-// there (InterpolationNoiseGain).
+// corners once, the footprint's region being convex), and, where asked
+// for, the noise gain there (InterpolationNoiseGain).
 inline void SampleBilinearInside(const cv::Mat& image,
                                  double x,
                                  double y,
                                  ImageSample* sample,
-                                 float* noise_gain) {
+                                 float* noise_gain = nullptr) {
   const double u = x - 0.5;
   const double v = y - 0.5;
   const int ix = static_cast<int>(u);  // u, v >= 1: truncation is floor
@@ -92,8 +92,10 @@ inline void SampleBilinearInside(const cv::Mat& image,
                        w01 * (r2[2] - r2[0]) + w11 * (r2[3] - r2[1]));
   sample->dy = 0.5f * (w00 * (r2[1] - r0[1]) + w10 * (r2[2] - r0[2]) +
                        w01 * (r3[1] - r1[1]) + w11 * (r3[2] - r1[2]));
-  *noise_gain =
-      ((1 - fx) * (1 - fx) + fx * fx) * ((1 - fy) * (1 - fy) + fy * fy);
+  if (noise_gain != nullptr) {
+    *noise_gain =
+        ((1 - fx) * (1 - fx) + fx * fx) * ((1 - fy) * (1 - fy) + fy * fy);
+  }
 }
 
 // The value and gradient at (x, y). Returns false (and leaves `sample`

@@ -124,10 +124,6 @@ double CorrelationFromSums(double n,
   return cov / std::sqrt(var_f * var_g);
 }
 
-}  // namespace
-
-namespace {
-
 // Whether every sample of a patch of radius r under `affine` has its
 // bilinear footprint (InsideSampleFootprint) in the image: its four corner
 // samples have, with a margin against rounding (the region is convex and
@@ -346,30 +342,32 @@ class TakenParameters {
  public:
   explicit TakenParameters(const LsmMatrix& N) : N_(N) {}
 
-  double ConditionalInformation(int j, LsmVector* y) const {
-    double s = N_(j, j);
+  // What parameter j would add: its conditional information s and the row
+  // y that would extend L (L y = N_Sj).
+  struct Candidate {
+    int j = -1;
+    double information = 0;
+    LsmVector y;
+  };
+  Candidate Consider(int j) const {
+    Candidate c;
+    c.j = j;
+    c.information = N_(j, j);
     for (int a = 0; a < size_; ++a) {
       double v = N_(index_[a], j);
-      for (int b = 0; b < a; ++b) v -= L_(a, b) * (*y)[b];
-      (*y)[a] = v / L_(a, a);
-      s -= (*y)[a] * (*y)[a];
+      for (int b = 0; b < a; ++b) v -= L_(a, b) * c.y[b];
+      c.y[a] = v / L_(a, a);
+      c.information -= c.y[a] * c.y[a];
     }
-    return s;
-  }
-  double ConditionalInformation(int j) const {
-    LsmVector y;
-    return ConditionalInformation(j, &y);
+    return c;
   }
 
-  // Takes j; false (and j not taken) where it adds no information.
-  bool Take(int j) {
-    LsmVector y;
-    const double s = ConditionalInformation(j, &y);
-    if (!(s > 0)) return false;
-    for (int b = 0; b < size_; ++b) L_(size_, b) = y[b];
-    L_(size_, size_) = std::sqrt(s);
-    index_[size_++] = j;
-    return true;
+  // Takes a considered parameter; its information must be positive (the
+  // selection's thresholds are), or L would not stay regular.
+  void Take(const Candidate& c) {
+    for (int b = 0; b < size_; ++b) L_(size_, b) = c.y[b];
+    L_(size_, size_) = std::sqrt(c.information);
+    index_[size_++] = c.j;
   }
 
  private:
@@ -407,28 +405,31 @@ std::array<bool, kNumLsmParams> SelectLsmParameters(
   std::array<bool, kNumLsmParams> held;
   held.fill(true);
   TakenParameters taken(N);
-  auto accept = [&](int j) {
-    if (taken.Take(j)) held[j] = false;
+  auto accept = [&](const TakenParameters::Candidate& c) {
+    taken.Take(c);
+    held[c.j] = false;
   };
   // Shifts: the better determined first, the other one only if it carries
   // enough information of its own.
   int first = kLsmA0, second = kLsmB0;
   if (N(kLsmB0, kLsmB0) > N(kLsmA0, kLsmA0)) std::swap(first, second);
   if (enabled[first] && N(first, first) > 0) {
-    accept(first);
+    accept(taken.Consider(first));
     if (enabled[second]) {
-      const double s = taken.ConditionalInformation(second);
-      if (s >= options.min_shift_information_ratio * N(first, first)) {
-        accept(second);
+      const TakenParameters::Candidate c = taken.Consider(second);
+      if (c.information > 0 &&
+          c.information >=
+              options.min_shift_information_ratio * N(first, first)) {
+        accept(c);
       }
     }
   } else if (enabled[second] && N(second, second) > 0) {
-    accept(second);
+    accept(taken.Consider(second));
   }
   for (int j : {kLsmR0, kLsmR1, kLsmA1, kLsmB2, kLsmA2, kLsmB1}) {
     if (!enabled[j] || !(N(j, j) > 0)) continue;
-    const double s = taken.ConditionalInformation(j);
-    if (s > options.min_pivot * N(j, j)) accept(j);
+    const TakenParameters::Candidate c = taken.Consider(j);
+    if (c.information > options.min_pivot * N(j, j)) accept(c);
   }
   return held;
 }
