@@ -265,9 +265,22 @@ TEST(DenseCommand, EditRemovesBlundersInjectedIntoTheDenseCloud) {
   EXPECT_NEAR(edit["num_blunders"].get<double>(), 0.02 * cloud.size(), 1);
   // The issue asks for 95 % and under 1 %; on this thin cloud (an eighth
   // of the surface covered: blunders in the gaps have no surface around
-  // them to be judged by), measured 85.4 % and 1.15 %.
+  // them to be judged by), measured 84.4 % and 0.89 % (85.4 % and 1.15 %
+  // before the close test and the estimated added sigma). The cloud has
+  // blunders of its own: 548 unflagged points lie more than 1 cm (the
+  // smallest injected offset) from the truth, and no edit can tell an
+  // injected 1 cm blunder from those.
   EXPECT_GT(edit["blunders_removed"].get<double>(), 0.8);
-  EXPECT_LT(edit["good_removed"].get<double>(), 0.025);
+  EXPECT_LT(edit["good_removed"].get<double>(), 0.0125);
+  const size_t off_surface = edit["num_off_surface"].get<size_t>();
+  EXPECT_GT(off_surface, 0u);
+  EXPECT_LT(off_surface, edit["num_good"].get<size_t>() / 4);
+  // The points on the surface go less often than the unflagged ones as a
+  // whole, and the input's own blunders more often.
+  EXPECT_LT(edit["on_surface_removed"].get<double>(),
+            edit["good_removed"].get<double>());
+  EXPECT_GT(edit["off_surface_removed"].get<double>(),
+            edit["on_surface_removed"].get<double>());
   // No smoothing: the good points kept are as close to the truth as all
   // good points were (measured 10.10 mm against 10.10 mm). The blunders
   // that stay cost little: measured 10.60 mm for all kept points against

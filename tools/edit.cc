@@ -22,15 +22,15 @@ nlohmann::ordered_json ReportToJson(const CloudEditReport& report,
   json["num_kept"] = report.num_kept;
   json["num_removed"] = report.num_removed;
   json["used_point_precision"] = report.used_point_precision;
+  json["added_sigma_m"] = report.added_sigma_m;
   json["converged"] = report.converged;
   if (report.method == CloudEditMethod::kRadius) {
     json["radius_m"] = report.radius_m;
   }
   json["seconds"] = report.seconds;
   nlohmann::ordered_json reasons = nlohmann::ordered_json::object();
-  size_t counts[5] = {0, 0, 0, 0, 0};
-  for (EditReason reason : report.reasons) ++counts[static_cast<int>(reason)];
-  for (int r = 1; r < 5; ++r) {
+  const std::vector<size_t> counts = report.CountByReason();
+  for (int r = 1; r < kNumEditReasons; ++r) {
     if (counts[r] > 0) {
       reasons[EditReasonName(static_cast<EditReason>(r))] = counts[r];
     }
@@ -47,6 +47,7 @@ nlohmann::ordered_json ReportToJson(const CloudEditReport& report,
          {"num_restored", it.num_restored},
          {"num_sigma", it.num_sigma},
          {"num_absolute", it.num_absolute},
+         {"num_close", it.num_close},
          {"median_normalized_deviation", it.median_normalized_deviation},
          {"seconds", it.seconds}});
   }
@@ -86,10 +87,22 @@ int RunEdit(int argc, char** argv) {
   app.add_option("--max_deviation_m",
                  options.surface_fit.max_deviation_m,
                  "surface_fit: delete beyond this distance, metres (0 = off)");
+  app.add_option("--num_close_neighbors",
+                 options.surface_fit.num_close_neighbors,
+                 "surface_fit: the close test, against the plane of this "
+                 "many nearest points (0 = off)");
+  app.add_option("--max_close_deviation_sigma",
+                 options.surface_fit.max_close_deviation_sigma,
+                 "surface_fit: the close test's threshold, standard "
+                 "deviations");
   app.add_option(
       "--use_point_precision",
       options.surface_fit.use_point_precision,
       "surface_fit: 1 = weights and sigma units from s_normal, or sx, sy, sz");
+  app.add_option("--added_sigma_m",
+                 options.surface_fit.added_sigma_m,
+                 "surface_fit: sigma added to every stated one in quadrature, "
+                 "metres (-1 = estimated from the cloud, 0 = none)");
   app.add_option("--mean_k",
                  options.statistical.mean_k,
                  "statistical: neighbours for the mean distance");
@@ -106,7 +119,8 @@ int RunEdit(int argc, char** argv) {
   app.add_option("--removed_path",
                  removed_path,
                  "Also write the removed points here (PLY, attribute "
-                 "edit_reason: 1 sigma, 2 absolute, 3 statistical, 4 radius)");
+                 "edit_reason: 1 sigma, 2 absolute, 3 statistical, 4 radius, "
+                 "5 close)");
   app.add_option(
       "--report_path", report_path, "Write the report (per pass) as JSON");
   app.add_option("--overwrite", overwrite, "Replace existing output files");

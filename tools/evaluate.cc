@@ -246,6 +246,9 @@ int RunEvaluate(int argc, char** argv) {
   std::string textured_mesh_path, texture_path, heldout_path, render_path;
   bool align = true;
   double gsd_m = 0, threshold_m = 0, threshold_gsd = 2;
+  // synth_cloud's smallest blunder offset: an unflagged point as far off is
+  // as much a blunder as an injected one.
+  double off_surface_m = 0.01;
   int num_samples = 200000, num_threads = -1;
   CommandLine command(
       "evaluate",
@@ -275,6 +278,11 @@ int RunEvaluate(int argc, char** argv) {
                  "(`bayon synth_cloud`); --cloud_path is the edited one: "
                  "blunders and good points removed, and the RMS of the "
                  "kept points against the blunder-free input's");
+  app.add_option("--off_surface_m",
+                 off_surface_m,
+                 "With --edit_input_path: unflagged points farther than this "
+                 "from the truth (the input's own blunders) are also counted "
+                 "apart");
   app.add_option("--mesh_path", mesh_path, "Mesh (PLY) to evaluate");
   app.add_option("--textured_mesh_path",
                  textured_mesh_path,
@@ -323,6 +331,9 @@ int RunEvaluate(int argc, char** argv) {
           "--cloud_path");
     }
     CheckFileExists(edit_input_path, "--edit_input_path");
+  }
+  if (!(off_surface_m >= 0)) {
+    ThrowInputError("--off_surface_m must be >= 0 (got ", off_surface_m, ")");
   }
   const TruthPaths found = FindTruth(ground_truth_path);
   if (surface_path.empty()) surface_path = found.surface;
@@ -450,8 +461,8 @@ int RunEvaluate(int argc, char** argv) {
         if (!edit_input_path.empty()) {
           PointCloud before = ReadPointCloudPly(edit_input_path);
           Transform(truth_from_model, &before);
-          const CloudEditEvaluation edit =
-              EvaluateCloudEdit(before, cloud, truth_distance, num_threads);
+          const CloudEditEvaluation edit = EvaluateCloudEdit(
+              before, cloud, truth_distance, off_surface_m, num_threads);
           std::printf(
               "\n%s\n%s\n",
               CloudEditEvaluation::TableHeader().c_str(),
@@ -462,6 +473,10 @@ int RunEvaluate(int argc, char** argv) {
               {"blunders_removed", edit.BlundersRemovedFraction()},
               {"num_good", edit.num_good_before},
               {"good_removed", edit.GoodRemovedFraction()},
+              {"off_surface_m", edit.off_surface_m},
+              {"num_off_surface", edit.num_off_surface_before},
+              {"off_surface_removed", edit.OffSurfaceRemovedFraction()},
+              {"on_surface_removed", edit.OnSurfaceRemovedFraction()},
               {"rms_good_before_m", edit.good_before.rms},
               {"rms_kept_m", edit.kept_after.rms},
               {"rms_good_kept_m", edit.good_after.rms}};

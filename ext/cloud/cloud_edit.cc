@@ -147,6 +147,86 @@ bool TwoFaceDeviation(const PointCloud& cloud,
   return true;
 }
 
+// Every point tested against the patch of its nearest unflagged neighbours
+// at one scale.
+struct ScaleTest {
+  std::vector<double> deviation;  // from the patch, NaN: no patch
+  std::vector<double> factor;     // the patch's variance factor
+  std::vector<double> z;          // normalised deviation, -1: untested
+  // The point's stated variance along the patch's normal (1 without).
+  std::vector<double> own_variance;
+  double floor = 0;  // the least factor z was scaled by
+};
+
+// The test against the patch of the `count` nearest unflagged neighbours
+// (the first `count` of the point's row of `neighbor_index`, `width` wide),
+// in a frame whose normal is their mean normal. A point without a patch is
+// kept, untested.
+ScaleTest TestAtScale(const PointCloud& cloud,
+                      const std::vector<Eigen::Vector3d>& sigmas,
+                      const std::vector<int>& neighbor_index,
+                      const std::vector<Eigen::Vector3d>& normals,
+                      int width,
+                      int count,
+                      double min_variance,
+                      int num_threads) {
+  const size_t n = cloud.size();
+  const bool weighted = !sigmas.empty();
+  const double kNaN = std::numeric_limits<double>::quiet_NaN();
+  ScaleTest test;
+  test.deviation.assign(n, kNaN);
+  test.factor.assign(n, kNaN);
+  test.own_variance.assign(n, 1.0);
+  // The variance of the deviation before scaling by the factor.
+  std::vector<double> unit_variance(n);
+  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
+    std::vector<Eigen::Vector3d> neighbors, neighbor_sigmas, neighbor_normals;
+    neighbors.reserve(count);
+    neighbor_normals.reserve(count);
+    for (int j = 0; j < count && neighbor_index[i * width + j] >= 0; ++j) {
+      const int index = neighbor_index[i * width + j];
+      neighbors.push_back(cloud.positions[index]);
+      if (weighted) neighbor_sigmas.push_back(sigmas[index]);
+      if (normals[index].squaredNorm() > 0) {
+        neighbor_normals.push_back(normals[index]);
+      }
+    }
+    const QuadricPatch patch = FitQuadricPatch(cloud.positions[i],
+                                               neighbors,
+                                               neighbor_sigmas,
+                                               MeanAxis(neighbor_normals));
+    if (!patch.valid) return;
+    test.deviation[i] = patch.QueryDeviation();
+    test.factor[i] = patch.variance_factor;
+    // The point's own variance along the normal (1 in units of the factor
+    // without stated precision) plus the patch's height uncertainty.
+    if (weighted) {
+      test.own_variance[i] = VarianceAlong(patch.frame.col(2), sigmas[i]);
+    }
+    unit_variance[i] = test.own_variance[i] + patch.c0_variance;
+  });
+
+  // The factor scales the test where the surface is rougher than the patch
+  // at this scale, but never below the cloud's typical (median) factor, nor
+  // below 1 with stated precision: a factor from a few residuals is noisy,
+  // and a small one is mostly chance.
+  std::vector<double> factors;
+  factors.reserve(n);
+  for (double f : test.factor) {
+    if (!std::isnan(f)) factors.push_back(f);
+  }
+  test.floor = Median(std::move(factors));
+  if (weighted) test.floor = std::max(test.floor, 1.0);
+  test.z.assign(n, -1.0);
+  for (size_t i = 0; i < n; ++i) {
+    if (std::isnan(test.deviation[i])) continue;
+    const double variance = std::max(
+        std::max(test.factor[i], test.floor) * unit_variance[i], min_variance);
+    test.z[i] = std::abs(test.deviation[i]) / std::sqrt(variance);
+  }
+  return test;
+}
+
 void SurfaceFitPass(const PointCloud& cloud,
                     const std::vector<Eigen::Vector3d>& sigmas,
                     const std::vector<int>& nearest,
@@ -156,10 +236,10 @@ void SurfaceFitPass(const PointCloud& cloud,
                     double min_variance,
                     int num_threads,
                     std::vector<EditReason>* reasons,
-                    EditIterationReport* report) {
+                    EditIterationReport* report,
+                    ScaleTest* patch_test = nullptr) {
   const size_t n = cloud.size();
   const int k = options.num_neighbors;
-  const bool weighted = !sigmas.empty();
   // First the k nearest unflagged neighbours of every point (itself left
   // out; fewer where more than width - k of its nearest are flagged) and the
   // normal of every unflagged point from its neighbourhood.
@@ -185,60 +265,30 @@ void SurfaceFitPass(const PointCloud& cloud,
     if (eigenvalues(1) > 1e-12 * eigenvalues(0)) normals[i] = axes.col(2);
   });
 
-  // Then every point against the patch of its neighbours, in a frame whose
-  // normal is their mean normal.
-  // Per point: deviation from its patch, the patch's variance factor, and
-  // the variance of the deviation before scaling by that factor; NaN when
-  // the patch could not be fitted (the point is kept, untested).
-  const double kNaN = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> deviation(n, kNaN), factor(n, kNaN), unit_variance(n);
-  QuadricFitOptions fit_options;
-  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
-    std::vector<Eigen::Vector3d> neighbors, neighbor_sigmas, neighbor_normals;
-    neighbors.reserve(k);
-    neighbor_normals.reserve(k);
-    for (int j = 0; j < k && neighbor_index[i * k + j] >= 0; ++j) {
-      const int index = neighbor_index[i * k + j];
-      neighbors.push_back(cloud.positions[index]);
-      if (weighted) neighbor_sigmas.push_back(sigmas[index]);
-      if (normals[index].squaredNorm() > 0) {
-        neighbor_normals.push_back(normals[index]);
-      }
-    }
-    const QuadricPatch patch = FitQuadricPatch(cloud.positions[i],
-                                               neighbors,
-                                               neighbor_sigmas,
-                                               MeanAxis(neighbor_normals),
-                                               fit_options);
-    if (!patch.valid) return;
-    deviation[i] = patch.QueryDeviation();
-    factor[i] = patch.variance_factor;
-    // The point's own variance along the normal (1 in units of the factor
-    // without stated precision) plus the patch's height uncertainty.
-    unit_variance[i] =
-        (weighted ? VarianceAlong(patch.frame.col(2), sigmas[i]) : 1.0) +
-        patch.c0_variance;
-  });
-
-  // The factor scales the test where the surface is rougher than a quadric
-  // at this scale, but never below the cloud's typical (median) factor, nor
-  // below 1 with stated precision: a factor from ~20 residuals is noisy, and
-  // a small one is mostly chance.
-  std::vector<double> factors;
-  factors.reserve(n);
-  for (double f : factor) {
-    if (!std::isnan(f)) factors.push_back(f);
+  // Then every point against the patch of its neighbours, and against the
+  // plane of its few nearest ones.
+  ScaleTest patch = TestAtScale(
+      cloud, sigmas, neighbor_index, normals, k, k, min_variance, num_threads);
+  const std::vector<double>& deviation = patch.deviation;
+  const std::vector<double>& factor = patch.factor;
+  std::vector<double>& z = patch.z;
+  const double floor = patch.floor;
+  // The close test catches a blunder over a thin part of the cloud, whose
+  // patch reaches over corners and ledges that no quadric fits: the
+  // inflated factor hides it there, while the few nearest points, on the
+  // surface below it, fit a plane well.
+  std::vector<double> close_z;
+  if (options.num_close_neighbors > 0) {
+    close_z = TestAtScale(cloud,
+                          sigmas,
+                          neighbor_index,
+                          normals,
+                          k,
+                          options.num_close_neighbors,
+                          min_variance,
+                          num_threads)
+                  .z;
   }
-  double floor = Median(std::move(factors));
-  if (weighted) floor = std::max(floor, 1.0);
-  std::vector<double> z(n, -1.0);  // -1: not tested
-  for (size_t i = 0; i < n; ++i) {
-    if (std::isnan(deviation[i])) continue;
-    const double variance =
-        std::max(std::max(factor[i], floor) * unit_variance[i], min_variance);
-    z[i] = std::abs(deviation[i]) / std::sqrt(variance);
-  }
-
   // Where a patch fits its neighbours far worse than is typical (scatter
   // beyond twice the typical), the neighbourhood may straddle an edge (a
   // cornice, a step): one quadric across two faces fits neither and its
@@ -266,13 +316,21 @@ void SurfaceFitPass(const PointCloud& cloud,
   std::vector<EditReason> next(n, EditReason::kKept);
   std::vector<double> normalized(n, -1.0);  // -1: not tested
   for (size_t i = 0; i < n; ++i) {
-    if (!(z[i] >= 0)) continue;
-    normalized[i] = z[i];
-    if (normalized[i] > options.max_deviation_sigma) {
-      next[i] = EditReason::kDeviationSigma;
-    } else if (options.max_deviation_m > 0 &&
-               std::abs(deviation[i]) > options.max_deviation_m) {
-      next[i] = EditReason::kDeviationAbsolute;
+    const bool close_tested = !close_z.empty() && close_z[i] >= 0;
+    if (z[i] >= 0) {
+      normalized[i] = z[i];
+      if (z[i] > options.max_deviation_sigma) {
+        next[i] = EditReason::kDeviationSigma;
+      } else if (options.max_deviation_m > 0 &&
+                 std::abs(deviation[i]) > options.max_deviation_m) {
+        next[i] = EditReason::kDeviationAbsolute;
+      }
+    } else if (close_tested) {
+      normalized[i] = close_z[i];
+    }
+    if (next[i] == EditReason::kKept && close_tested &&
+        close_z[i] > options.max_close_deviation_sigma) {
+      next[i] = EditReason::kDeviationClose;
     }
   }
 
@@ -292,9 +350,51 @@ void SurfaceFitPass(const PointCloud& cloud,
     if (was && !is) ++report->num_restored;
     if (next[i] == EditReason::kDeviationSigma) ++report->num_sigma;
     if (next[i] == EditReason::kDeviationAbsolute) ++report->num_absolute;
+    if (next[i] == EditReason::kDeviationClose) ++report->num_close;
   }
   report->median_normalized_deviation = Median(std::move(tested));
   *reasons = std::move(next);
+  if (patch_test != nullptr) *patch_test = std::move(patch);
+}
+
+// The sigma that errors unmodelled by the stated precision add to every
+// point (SurfaceFitEditOptions::added_sigma_m), from the deviations of a
+// pass without flags: the points binned by their stated variance along the
+// normal (deciles), a robust variance of the deviations per bin (median of
+// d^2 over that of chi-square(1)), and a line var = a sigma^2 + b through the
+// bins by least squares; sqrt(b / a), or 0 where b <= 0 or a <= 0 (the
+// stated sigmas already explain the scatter).
+double EstimateAddedSigma(const ScaleTest& test) {
+  std::vector<std::pair<double, double>> samples;  // (sigma^2, d^2)
+  for (size_t i = 0; i < test.z.size(); ++i) {
+    if (test.z[i] >= 0) {
+      samples.emplace_back(test.own_variance[i],
+                           test.deviation[i] * test.deviation[i]);
+    }
+  }
+  constexpr int kBins = 10;
+  if (samples.size() < 20 * kBins) return 0;
+  std::sort(samples.begin(), samples.end());
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+  for (int bin = 0; bin < kBins; ++bin) {
+    const size_t begin = samples.size() * bin / kBins,
+                 end = samples.size() * (bin + 1) / kBins;
+    double mean_variance = 0;
+    std::vector<double> squares;
+    for (size_t j = begin; j < end; ++j) {
+      mean_variance += samples[j].first;
+      squares.push_back(samples[j].second);
+    }
+    mean_variance /= end - begin;
+    const double robust = Median(std::move(squares)) / kChiSquare1Median;
+    const Eigen::Vector2d row(mean_variance, 1.0);
+    normal += row * row.transpose();
+    rhs += robust * row;
+  }
+  const Eigen::Vector2d ab = normal.ldlt().solve(rhs);
+  if (!(ab(0) > 0) || !(ab(1) > 0)) return 0;
+  return std::sqrt(ab(1) / ab(0));
 }
 
 // The median distance from a point to its nearest neighbour, over up to
@@ -392,6 +492,9 @@ std::string EditReasonName(EditReason reason) {
       return "statistical outlier";
     case EditReason::kRadius:
       return "too few neighbours within the radius";
+    case EditReason::kDeviationClose:
+      return "deviation from the plane of its nearest points beyond the "
+             "sigma threshold";
   }
   return "?";
 }
@@ -411,6 +514,20 @@ void SurfaceFitEditOptions::Check() const {
               max_deviation_sigma);
   CheckOption(
       max_deviation_m >= 0, "--max_deviation_m", ">= 0", max_deviation_m);
+  CheckOption(
+      num_close_neighbors == 0 ||
+          (num_close_neighbors >= 6 && num_close_neighbors <= num_neighbors),
+      "--num_close_neighbors",
+      "0 or in [6, --num_neighbors]",
+      num_close_neighbors);
+  CheckOption(added_sigma_m >= 0 || added_sigma_m == -1,
+              "--added_sigma_m",
+              ">= 0, or -1 to estimate it",
+              added_sigma_m);
+  CheckOption(max_close_deviation_sigma > 0,
+              "--max_close_deviation_sigma",
+              "> 0",
+              max_close_deviation_sigma);
 }
 
 void StatisticalEditOptions::Check() const {
@@ -508,6 +625,12 @@ void CheckCloudSpansSurface(const PointCloud& cloud,
   }
 }
 
+std::vector<size_t> CloudEditReport::CountByReason() const {
+  std::vector<size_t> counts(kNumEditReasons, 0);
+  for (EditReason reason : reasons) ++counts[static_cast<int>(reason)];
+  return counts;
+}
+
 std::string CloudEditReport::Summary() const {
   std::ostringstream out;
   out << std::fixed << std::setprecision(2);
@@ -519,13 +642,16 @@ std::string CloudEditReport::Summary() const {
     out << (used_point_precision
                 ? "; weights and sigma units from the points' own precision"
                 : "; sigma units from the local scatter");
+    if (added_sigma_m > 0) {
+      out << std::setprecision(5) << " (+ " << added_sigma_m
+          << " m in quadrature)" << std::setprecision(2);
+    }
     out << (converged ? "; converged" : "");
   }
   if (method == CloudEditMethod::kRadius)
     out << "; radius " << radius_m << " m";
-  size_t counts[5] = {0, 0, 0, 0, 0};
-  for (EditReason reason : reasons) ++counts[static_cast<int>(reason)];
-  for (int r = 1; r < 5; ++r) {
+  const std::vector<size_t> counts = CountByReason();
+  for (int r = 1; r < kNumEditReasons; ++r) {
     if (counts[r] > 0) {
       out << "\n  removed " << counts[r] << ": "
           << EditReasonName(static_cast<EditReason>(r));
@@ -536,9 +662,9 @@ std::string CloudEditReport::Summary() const {
         << " (untested " << it.num_untested << "), flagged " << it.num_flagged
         << " (new " << it.num_newly_flagged << ", restored " << it.num_restored
         << "; by sigma " << it.num_sigma << ", absolute " << it.num_absolute
-        << "), median |d|/sigma " << std::setprecision(3)
-        << it.median_normalized_deviation << std::setprecision(2) << ", "
-        << it.seconds << " s";
+        << ", close " << it.num_close << "), median |d|/sigma "
+        << std::setprecision(3) << it.median_normalized_deviation
+        << std::setprecision(2) << ", " << it.seconds << " s";
   }
   return out.str();
 }
@@ -578,6 +704,33 @@ PointCloud EditPointCloud(const PointCloud& cloud,
     const std::vector<int> nearest =
         NearestNeighbors(cloud, width, options.num_threads);
     const double spacing = MedianPointSpacing(cloud);
+    double added = options.surface_fit.added_sigma_m;
+    if (!sigmas.empty() && added != 0) {
+      if (added < 0) {
+        // A pass without flags gives the deviations to estimate it from.
+        std::vector<EditReason> none(cloud.size(), EditReason::kKept);
+        EditIterationReport ignored;
+        ScaleTest test;
+        SurfaceFitPass(cloud,
+                       sigmas,
+                       nearest,
+                       width,
+                       spacing,
+                       options.surface_fit,
+                       min_variance,
+                       options.num_threads,
+                       &none,
+                       &ignored,
+                       &test);
+        added = EstimateAddedSigma(test);
+        LOG(INFO) << "edit: estimated sigma added to the stated ones: " << added
+                  << " m";
+      }
+      for (Eigen::Vector3d& sigma : sigmas) {
+        sigma = (sigma.array().square() + added * added).sqrt();
+      }
+      report->added_sigma_m = added;
+    }
     for (int iteration = 1; iteration <= options.surface_fit.num_iterations;
          ++iteration) {
       const Timer pass_timer;

@@ -13,10 +13,6 @@
 namespace bayon {
 namespace {
 
-// Median of chi-square with one degree of freedom: the robust variance
-// factor divides by it so that it estimates the variance, not the median.
-constexpr double kChiSquare1Median = 0.454936;
-
 // Smallest eigenvalue over largest of the normal matrix (in the scaled
 // coordinates) below which its solution is not trusted.
 constexpr double kMinConditioning = 1e-9;

@@ -23,6 +23,11 @@
 
 namespace bayon {
 
+// Median of chi-square with one degree of freedom: a robust variance is the
+// median of the squares divided by it, so that it estimates the variance,
+// not the median.
+inline constexpr double kChiSquare1Median = 0.454936;
+
 struct QuadricPatch {
   bool valid = false;
   // 6 for the quadric; 3 when the neighbourhood could only carry a plane

@@ -3,6 +3,7 @@
 
 #include "ext/core/errors.h"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace bayon {
@@ -31,21 +32,45 @@ double CloudEditEvaluation::BlundersRemovedFraction() const {
                          num_blunders_before;
 }
 
+namespace {
+
+double RemovedFraction(size_t before, size_t after) {
+  return before == 0 ? 0.0 : 1.0 - static_cast<double>(after) / before;
+}
+
+size_t CountBeyond(const std::vector<double>& distances, double limit) {
+  return limit > 0 ? std::count_if(distances.begin(),
+                                   distances.end(),
+                                   [&](double d) { return d > limit; })
+                   : 0;
+}
+
+}  // namespace
+
 double CloudEditEvaluation::GoodRemovedFraction() const {
-  return num_good_before == 0
-             ? 0.0
-             : 1.0 - static_cast<double>(num_good_after) / num_good_before;
+  return RemovedFraction(num_good_before, num_good_after);
+}
+
+double CloudEditEvaluation::OnSurfaceRemovedFraction() const {
+  return RemovedFraction(num_good_before - num_off_surface_before,
+                         num_good_after - num_off_surface_after);
+}
+
+double CloudEditEvaluation::OffSurfaceRemovedFraction() const {
+  return RemovedFraction(num_off_surface_before, num_off_surface_after);
 }
 
 std::string CloudEditEvaluation::TableHeader() {
   char line[256];
   std::snprintf(line,
                 sizeof(line),
-                "%-22s %9s %9s %10s %10s %12s %12s %12s",
+                "%-22s %9s %9s %10s %10s %10s %10s %12s %12s %12s",
                 "edit",
                 "blunders",
                 "removed%",
                 "good",
+                "removed%",
+                "off surf.",
                 "removed%",
                 "RMS ref mm",
                 "RMS kept mm",
@@ -57,12 +82,15 @@ std::string CloudEditEvaluation::Table(const std::string& label) const {
   char line[256];
   std::snprintf(line,
                 sizeof(line),
-                "%-22s %9zu %9.2f %10zu %10.3f %12.4f %12.4f %12.4f",
+                "%-22s %9zu %9.2f %10zu %10.3f %10zu %10.2f %12.4f %12.4f "
+                "%12.4f",
                 label.c_str(),
                 num_blunders_before,
                 100 * BlundersRemovedFraction(),
                 num_good_before,
                 100 * GoodRemovedFraction(),
+                num_off_surface_before,
+                100 * OffSurfaceRemovedFraction(),
                 1e3 * good_before.rms,
                 1e3 * kept_after.rms,
                 1e3 * good_after.rms);
@@ -72,6 +100,7 @@ std::string CloudEditEvaluation::Table(const std::string& label) const {
 CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
                                       const PointCloud& after,
                                       const MeshDistance& distance,
+                                      double off_surface_m,
                                       int num_threads) {
   std::vector<Eigen::Vector3d> good_before, blunders_before, good_after,
       blunders_after;
@@ -82,10 +111,14 @@ CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
   evaluation.num_blunders_after = blunders_after.size();
   evaluation.num_good_before = good_before.size();
   evaluation.num_good_after = good_after.size();
-  evaluation.good_before =
-      ComputeDistanceStatistics(distance.Distances(good_before, num_threads));
+  evaluation.off_surface_m = off_surface_m;
+  std::vector<double> good_before_d =
+      distance.Distances(good_before, num_threads);
+  evaluation.num_off_surface_before = CountBeyond(good_before_d, off_surface_m);
+  evaluation.good_before = ComputeDistanceStatistics(std::move(good_before_d));
   const std::vector<double> good_d =
       distance.Distances(good_after, num_threads);
+  evaluation.num_off_surface_after = CountBeyond(good_d, off_surface_m);
   std::vector<double> kept_d = distance.Distances(blunders_after, num_threads);
   kept_d.insert(kept_d.end(), good_d.begin(), good_d.end());
   evaluation.good_after = ComputeDistanceStatistics(good_d);
