@@ -704,6 +704,21 @@ PointCloud EditPointCloud(const PointCloud& cloud,
     const std::vector<int> nearest =
         NearestNeighbors(cloud, width, options.num_threads);
     const double spacing = MedianPointSpacing(cloud);
+    auto pass = [&](std::vector<EditReason>* reasons,
+                    EditIterationReport* pass_report,
+                    ScaleTest* patch_test) {
+      SurfaceFitPass(cloud,
+                     sigmas,
+                     nearest,
+                     width,
+                     spacing,
+                     options.surface_fit,
+                     min_variance,
+                     options.num_threads,
+                     reasons,
+                     pass_report,
+                     patch_test);
+    };
     double added = options.surface_fit.added_sigma_m;
     if (!sigmas.empty() && added != 0) {
       if (added < 0) {
@@ -711,17 +726,7 @@ PointCloud EditPointCloud(const PointCloud& cloud,
         std::vector<EditReason> none(cloud.size(), EditReason::kKept);
         EditIterationReport ignored;
         ScaleTest test;
-        SurfaceFitPass(cloud,
-                       sigmas,
-                       nearest,
-                       width,
-                       spacing,
-                       options.surface_fit,
-                       min_variance,
-                       options.num_threads,
-                       &none,
-                       &ignored,
-                       &test);
+        pass(&none, &ignored, &test);
         added = EstimateAddedSigma(test);
         LOG(INFO) << "edit: estimated sigma added to the stated ones: " << added
                   << " m";
@@ -734,25 +739,15 @@ PointCloud EditPointCloud(const PointCloud& cloud,
     for (int iteration = 1; iteration <= options.surface_fit.num_iterations;
          ++iteration) {
       const Timer pass_timer;
-      EditIterationReport pass;
-      pass.iteration = iteration;
-      SurfaceFitPass(cloud,
-                     sigmas,
-                     nearest,
-                     width,
-                     spacing,
-                     options.surface_fit,
-                     min_variance,
-                     options.num_threads,
-                     &report->reasons,
-                     &pass);
-      pass.seconds = pass_timer.Seconds();
-      LOG(INFO) << "edit: iteration " << iteration << ": " << pass.num_flagged
-                << " flagged (" << pass.num_newly_flagged << " new, "
-                << pass.num_restored << " restored)";
-      report->iterations.push_back(pass);
-      if (iteration > 1 && pass.num_newly_flagged == 0 &&
-          pass.num_restored == 0) {
+      EditIterationReport it;
+      it.iteration = iteration;
+      pass(&report->reasons, &it, nullptr);
+      it.seconds = pass_timer.Seconds();
+      LOG(INFO) << "edit: iteration " << iteration << ": " << it.num_flagged
+                << " flagged (" << it.num_newly_flagged << " new, "
+                << it.num_restored << " restored)";
+      report->iterations.push_back(it);
+      if (iteration > 1 && it.num_newly_flagged == 0 && it.num_restored == 0) {
         report->converged = true;
         break;
       }
