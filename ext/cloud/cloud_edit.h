@@ -56,8 +56,8 @@ struct SurfaceFitEditOptions {
   // Absolute threshold in metres; 0 = off. With both set, either flags.
   double max_deviation_m = 0;
   // The close test: the point also against the plane of its nearest
-  // num_close_neighbors unflagged points (0 = off; at most num_neighbors),
-  // flagged beyond max_close_deviation_sigma. It catches blunders over thin
+  // num_close_neighbors unflagged points (0 = off; at most num_neighbors;
+  // from 9 on a quadric), flagged beyond max_close_deviation_sigma. It catches blunders over thin
   // parts of a cloud, where the patch of num_neighbors reaches over
   // corners and ledges, fits none of them, and its inflated scatter lets
   // the blunder pass.
