@@ -57,10 +57,10 @@ struct SurfaceFitEditOptions {
   double max_deviation_m = 0;
   // The close test: the point also against the plane of its nearest
   // num_close_neighbors unflagged points (0 = off; at most num_neighbors;
-  // from 9 on a quadric), flagged beyond max_close_deviation_sigma. It catches blunders over thin
-  // parts of a cloud, where the patch of num_neighbors reaches over
-  // corners and ledges, fits none of them, and its inflated scatter lets
-  // the blunder pass.
+  // from 9 on a quadric), flagged beyond max_close_deviation_sigma. It catches
+  // blunders over thin parts of a cloud, where the patch of num_neighbors
+  // reaches over corners and ledges, fits none of them, and its inflated
+  // scatter lets the blunder pass.
   int num_close_neighbors = 8;
   double max_close_deviation_sigma = 4.5;
   // Weight by and test in units of the points' own precision (PointSigmas)
