@@ -227,6 +227,47 @@ ScaleTest TestAtScale(const PointCloud& cloud,
   return test;
 }
 
+// The k nearest unflagged neighbours of every point (n x k, itself left
+// out; -1 where more than width - k of its `width` nearest are flagged) and
+// the normal of every unflagged point from its neighbourhood (zero where
+// they lie on a line).
+struct Neighborhoods {
+  std::vector<int> index;
+  std::vector<Eigen::Vector3d> normals;
+};
+
+Neighborhoods UnflaggedNeighborhoods(const PointCloud& cloud,
+                                     const std::vector<int>& nearest,
+                                     int width,
+                                     int k,
+                                     const std::vector<EditReason>& reasons,
+                                     int num_threads) {
+  const size_t n = cloud.size();
+  Neighborhoods hoods;
+  hoods.index.assign(n * k, -1);
+  hoods.normals.assign(n, Eigen::Vector3d::Zero());
+  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
+    int count = 0;
+    for (int j = 0; j < width && count < k; ++j) {
+      const int index = nearest[i * width + j];
+      if (index < 0) break;
+      if (reasons[index] == EditReason::kKept) {
+        hoods.index[i * k + count++] = index;
+      }
+    }
+    if (reasons[i] != EditReason::kKept || count < 3) return;
+    std::vector<Eigen::Vector3d> own = {cloud.positions[i]};
+    for (int j = 0; j < count; ++j) {
+      own.push_back(cloud.positions[hoods.index[i * k + j]]);
+    }
+    Eigen::Matrix3d axes;
+    Eigen::Vector3d eigenvalues;
+    PrincipalAxes(own, &axes, &eigenvalues);
+    if (eigenvalues(1) > 1e-12 * eigenvalues(0)) hoods.normals[i] = axes.col(2);
+  });
+  return hoods;
+}
+
 void SurfaceFitPass(const PointCloud& cloud,
                     const std::vector<Eigen::Vector3d>& sigmas,
                     const std::vector<int>& nearest,
@@ -236,34 +277,13 @@ void SurfaceFitPass(const PointCloud& cloud,
                     double min_variance,
                     int num_threads,
                     std::vector<EditReason>* reasons,
-                    EditIterationReport* report,
-                    ScaleTest* patch_test = nullptr) {
+                    EditIterationReport* report) {
   const size_t n = cloud.size();
   const int k = options.num_neighbors;
-  // First the k nearest unflagged neighbours of every point (itself left
-  // out; fewer where more than width - k of its nearest are flagged) and the
-  // normal of every unflagged point from its neighbourhood.
-  std::vector<int> neighbor_index(n * k, -1);
-  std::vector<Eigen::Vector3d> normals(n, Eigen::Vector3d::Zero());
-  ForEachPointInBlocks(n, num_threads, [&](size_t i) {
-    int count = 0;
-    for (int j = 0; j < width && count < k; ++j) {
-      const int index = nearest[i * width + j];
-      if (index < 0) break;
-      if ((*reasons)[index] == EditReason::kKept) {
-        neighbor_index[i * k + count++] = index;
-      }
-    }
-    if ((*reasons)[i] != EditReason::kKept || count < 3) return;
-    std::vector<Eigen::Vector3d> own = {cloud.positions[i]};
-    for (int j = 0; j < count; ++j) {
-      own.push_back(cloud.positions[neighbor_index[i * k + j]]);
-    }
-    Eigen::Matrix3d axes;
-    Eigen::Vector3d eigenvalues;
-    PrincipalAxes(own, &axes, &eigenvalues);
-    if (eigenvalues(1) > 1e-12 * eigenvalues(0)) normals[i] = axes.col(2);
-  });
+  const Neighborhoods hoods =
+      UnflaggedNeighborhoods(cloud, nearest, width, k, *reasons, num_threads);
+  const std::vector<int>& neighbor_index = hoods.index;
+  const std::vector<Eigen::Vector3d>& normals = hoods.normals;
 
   // Then every point against the patch of its neighbours, and against the
   // plane of its few nearest ones.
@@ -354,17 +374,38 @@ void SurfaceFitPass(const PointCloud& cloud,
   }
   report->median_normalized_deviation = Median(std::move(tested));
   *reasons = std::move(next);
-  if (patch_test != nullptr) *patch_test = std::move(patch);
 }
 
 // The sigma that errors unmodelled by the stated precision add to every
-// point (SurfaceFitEditOptions::added_sigma_m), from the deviations of a
-// pass without flags: the points binned by their stated variance along the
-// normal (deciles), a robust variance of the deviations per bin (median of
-// d^2 over that of chi-square(1)), and a line var = a sigma^2 + b through the
-// bins by least squares; sqrt(b / a), or 0 where b <= 0 or a <= 0 (the
-// stated sigmas already explain the scatter).
-double EstimateAddedSigma(const ScaleTest& test) {
+// point (SurfaceFitEditOptions::added_sigma_m), from the deviations of every
+// point from the patch of its `k` nearest neighbours, none flagged: the
+// points binned by their stated variance along the normal (deciles), a
+// robust variance of the deviations per bin (median of d^2 over that of
+// chi-square(1)), and a line var = a sigma^2 + b through the bins by least
+// squares; sqrt(b / a), or 0 where b <= 0 or a <= 0 (the stated sigmas
+// already explain the scatter).
+double EstimateAddedSigma(const PointCloud& cloud,
+                          const std::vector<Eigen::Vector3d>& sigmas,
+                          const std::vector<int>& nearest,
+                          int width,
+                          int k,
+                          double min_variance,
+                          int num_threads) {
+  const Neighborhoods hoods = UnflaggedNeighborhoods(
+      cloud,
+      nearest,
+      width,
+      k,
+      std::vector<EditReason>(cloud.size(), EditReason::kKept),
+      num_threads);
+  const ScaleTest test = TestAtScale(cloud,
+                                     sigmas,
+                                     hoods.index,
+                                     hoods.normals,
+                                     k,
+                                     k,
+                                     min_variance,
+                                     num_threads);
   std::vector<std::pair<double, double>> samples;  // (sigma^2, d^2)
   for (size_t i = 0; i < test.z.size(); ++i) {
     if (test.z[i] >= 0) {
@@ -704,30 +745,16 @@ PointCloud EditPointCloud(const PointCloud& cloud,
     const std::vector<int> nearest =
         NearestNeighbors(cloud, width, options.num_threads);
     const double spacing = MedianPointSpacing(cloud);
-    auto pass = [&](std::vector<EditReason>* reasons,
-                    EditIterationReport* pass_report,
-                    ScaleTest* patch_test) {
-      SurfaceFitPass(cloud,
-                     sigmas,
-                     nearest,
-                     width,
-                     spacing,
-                     options.surface_fit,
-                     min_variance,
-                     options.num_threads,
-                     reasons,
-                     pass_report,
-                     patch_test);
-    };
     double added = options.surface_fit.added_sigma_m;
     if (!sigmas.empty() && added != 0) {
       if (added < 0) {
-        // A pass without flags gives the deviations to estimate it from.
-        std::vector<EditReason> none(cloud.size(), EditReason::kKept);
-        EditIterationReport ignored;
-        ScaleTest test;
-        pass(&none, &ignored, &test);
-        added = EstimateAddedSigma(test);
+        added = EstimateAddedSigma(cloud,
+                                   sigmas,
+                                   nearest,
+                                   width,
+                                   options.surface_fit.num_neighbors,
+                                   min_variance,
+                                   options.num_threads);
         LOG(INFO) << "edit: estimated sigma added to the stated ones: " << added
                   << " m";
       }
@@ -741,7 +768,16 @@ PointCloud EditPointCloud(const PointCloud& cloud,
       const Timer pass_timer;
       EditIterationReport it;
       it.iteration = iteration;
-      pass(&report->reasons, &it, nullptr);
+      SurfaceFitPass(cloud,
+                     sigmas,
+                     nearest,
+                     width,
+                     spacing,
+                     options.surface_fit,
+                     min_variance,
+                     options.num_threads,
+                     &report->reasons,
+                     &it);
       it.seconds = pass_timer.Seconds();
       LOG(INFO) << "edit: iteration " << iteration << ": " << it.num_flagged
                 << " flagged (" << it.num_newly_flagged << " new, "
