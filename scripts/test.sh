@@ -2,8 +2,10 @@
 # Sets up, builds and runs every test through ctest.
 #   scripts/test.sh                 all tests (unit + end-to-end)
 #   scripts/test.sh --sanitize      under AddressSanitizer + UBSan (clang): the
-#                                   unit tests and the end-to-end tests of
-#                                   $sanitize_e2e, or those given after --
+#                                   unit tests and the end-to-end tests that
+#                                   build makes (tests/CMakeLists.txt's
+#                                   SANITIZE: the temple pipeline, bad input,
+#                                   concurrent writers)
 #   scripts/test.sh -- -R Camera    extra arguments after -- go to ctest
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -11,9 +13,6 @@ cd "$(dirname "$0")/.."
 setup_args=()
 ctest_args=()
 build_dir=build
-# The end-to-end tests run under the sanitizers by default (a regex of ctest
-# names): the whole temple pipeline, bad input, concurrent writers.
-sanitize_e2e='^(Pipeline|BadInput|BadModel|Concurrency)\.'
 while [ $# -gt 0 ]; do
   case "$1" in
     --sanitize) setup_args+=(--sanitize); build_dir=build-asan ;;
@@ -32,12 +31,5 @@ if [ "$build_dir" = build-asan ]; then
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
   # Leaks inside third-party libraries, each with its reason.
   export LSAN_OPTIONS="suppressions=$PWD/../tests/sanitizers/lsan.supp:print_suppressions=0"
-  if [ ${#ctest_args[@]} -eq 0 ]; then
-    # Within CI's budget: every unit test (the fuzz harnesses' replays among
-    # them) and the end-to-end tests that run every stage on small data.
-    ctest --output-on-failure -j"$(nproc)" -L unit
-    ctest --output-on-failure -j"$(nproc)" -R "$sanitize_e2e"
-    exit 0
-  fi
 fi
 ctest --output-on-failure -j"$(nproc)" "${ctest_args[@]}"

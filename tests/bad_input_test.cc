@@ -245,7 +245,7 @@ TEST(BadInput, ConfigFileWithUnknownKey) {
   const testing::CommandResult ok =
       testing::RunBayon({"import",
                          "--config",
-                         std::string(BAYON_SOURCE_DIR) + "/configs/import.ini",
+                         testing::ConfigPath("import.ini"),
                          "--image_path",
                          images,
                          "--database_path",

@@ -297,9 +297,7 @@ TEST(DenseCommand, FusedPlyMeshesWithStockColmap) {
   std::vector<std::string> args = DenseArgs(ws);
   args[6] = "image_002.png";
   // The ring configuration users start from.
-  args.insert(
-      args.end(),
-      {"--config", std::string(BAYON_SOURCE_DIR) + "/configs/dense_ring.ini"});
+  args.insert(args.end(), {"--config", testing::ConfigPath("dense_ring.ini")});
   const testing::CommandResult result = testing::RunBayon(args);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const testing::CommandResult meshed =

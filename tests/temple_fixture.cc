@@ -66,18 +66,17 @@ std::vector<std::string> TemplePipelineCommand(
     const TempleSetup& setup,
     const std::string& workspace,
     const std::vector<std::string>& more_configs) {
-  std::vector<std::string> args = {
-      "pipeline",
-      "--workspace_path",
-      workspace,
-      "--image_path",
-      setup.images,
-      "--config",
-      std::string(BAYON_DEFAULT_SOURCE_DIR) + "/configs/ring.ini",
-      "--config",
-      setup.config,
-      "--num_threads",
-      "2"};
+  std::vector<std::string> args = {"pipeline",
+                                   "--workspace_path",
+                                   workspace,
+                                   "--image_path",
+                                   setup.images,
+                                   "--config",
+                                   ConfigPath("ring.ini"),
+                                   "--config",
+                                   setup.config,
+                                   "--num_threads",
+                                   "2"};
   for (const std::string& config : more_configs) {
     args.push_back("--config");
     args.push_back(config);

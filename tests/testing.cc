@@ -43,6 +43,10 @@ std::string DataPath(const std::string& relative) {
   return fs::exists(path) ? path.string() : std::string();
 }
 
+std::string ConfigPath(const std::string& name) {
+  return (fs::path(BAYON_DEFAULT_SOURCE_DIR) / "configs" / name).string();
+}
+
 std::string TempDir(const std::string& name) {
   const char* env = std::getenv("BAYON_TEST_TMP");
   const fs::path root =

@@ -21,6 +21,9 @@ std::string DataDir();
 // DataDir() + "/" + relative, or empty if that path does not exist.
 std::string DataPath(const std::string& relative);
 
+// A file of the source tree's configs/ folder (e.g. "ring.ini").
+std::string ConfigPath(const std::string& name);
+
 // A fresh, empty folder for this test (removed and recreated).
 std::string TempDir(const std::string& name);
 
