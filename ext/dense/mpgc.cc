@@ -79,6 +79,11 @@ const char* MpgcStatusName(MpgcStatus status) {
 
 namespace {
 
+// The least contrast of a search patch relative to the template that the
+// radiometric fit may give it (a patch that does not correlate at all is
+// dropped for its correlation, not flattened to nothing).
+constexpr double kMinContrast = 0.05;
+
 bool Project(const MpgcView& view,
              const Eigen::Vector3d& xyz,
              Eigen::Vector2d* pixel) {
@@ -272,6 +277,11 @@ bool BuildSystem(const MpgcView& master,
                                  &state.equations)) {
       *failed = static_cast<int>(k);
       return false;
+    }
+    // Radiometry at its best for the geometry as it stands (lsm.h): the
+    // joint step would overshoot in contrast on these high-passed images.
+    if (options.lsm.estimate_radiometry) {
+      FitLsmRadiometry(kMinContrast, &state.params, &state.equations);
     }
     std::array<bool, kNumLsmParams> enabled;
     enabled.fill(true);

@@ -297,6 +297,39 @@ bool BuildLsmNormalEquations(const LsmTemplate& patch,
   return true;
 }
 
+bool FitLsmRadiometry(double min_scale,
+                      LsmParameters* params,
+                      LsmNormalEquations* equations) {
+  const LsmNormalEquations& e = *equations;
+  const double n = e.num_observations;
+  const double var_g = e.sum_gg - e.sum_g * e.sum_g / n;
+  if (!(n > 0) || !(var_g > 0) || params->r1 == 0) return false;
+  const double r1 =
+      std::max(min_scale, (e.sum_fg - e.sum_f * e.sum_g / n) / var_g);
+  const double r0 = (e.sum_f - r1 * e.sum_g) / n;
+  // Residuals l' = l + a + b g; the geometric columns carry r1 (scaled by
+  // s), the radiometric ones (1 and g) do not.
+  const double a = params->r0 - r0;
+  const double b = params->r1 - r1;
+  const double s = r1 / params->r1;
+  LsmMatrix& N = equations->N;
+  LsmVector& rhs = equations->rhs;
+  equations->residual_sq +=
+      2 * a * rhs[kLsmR0] + 2 * b * rhs[kLsmR1] + a * a * N(kLsmR0, kLsmR0) +
+      2 * a * b * N(kLsmR0, kLsmR1) + b * b * N(kLsmR1, kLsmR1);
+  for (int i = 0; i < kNumLsmParams; ++i) {
+    rhs[i] += a * N(i, kLsmR0) + b * N(i, kLsmR1);
+  }
+  LsmVector scale = LsmVector::Constant(s);
+  scale[kLsmR0] = scale[kLsmR1] = 1;
+  rhs = rhs.cwiseProduct(scale);
+  N = scale.asDiagonal() * N * scale.asDiagonal();
+  equations->residual_sq = std::max(0.0, equations->residual_sq);
+  params->r0 = r0;
+  params->r1 = r1;
+  return true;
+}
+
 void LsmOptions::Check() const {
   CheckOption(patch_radius >= 2 && patch_radius <= 50,
               "LsmOptions.patch_radius",

@@ -151,6 +151,19 @@ bool BuildLsmNormalEquations(const LsmTemplate& patch,
                              Interpolation interpolation,
                              LsmNormalEquations* equations);
 
+// Sets the radiometric parameters to their best values for the patch's
+// geometry as it stands (the regression of the template's grey values on
+// the resampled ones: r1 = cov(f, g) / var(g), at least min_scale) and
+// turns the normal equations built at the old values into those at the new
+// ones: exact, from the sums they hold, without resampling. MPGC matches
+// grey values high-passed about 128, where the columns of r0 and r1 are
+// nearly parallel and a joint Gauss-Newton step from a poor start swings
+// the contrast back and forth (rendered tower: with the fit a third fewer
+// points fail to converge). False where the resampled values do not vary.
+bool FitLsmRadiometry(double min_scale,
+                      LsmParameters* params,
+                      LsmNormalEquations* equations);
+
 // The correlation coefficient of the template and the search patch
 // resampled at `params` alone, without the normal equations (the same value
 // as BuildLsmNormalEquations' Correlation()): for searches that only rank

@@ -384,6 +384,60 @@ TEST(Lsm, NormalEquationsAreTheDesignMatrixSquared) {
   }
 }
 
+TEST(Lsm, RadiometricFitIsTheEquationsRebuiltAtTheRegression) {
+  // The search patch is the template's texture at another contrast and
+  // brightness plus noise, in grey values about 128 as MPGC's high-passed
+  // images are: the fit gives the regression of f on g, and the equations
+  // it turns are those built afresh at the fitted values.
+  cv::Mat f(kImageSize, kImageSize, CV_32F),
+      noise(kImageSize, kImageSize, CV_32F);
+  cv::randu(f, 118, 138);
+  cv::randn(noise, 0, 2);
+  const cv::Mat g = 0.6 * f + 51.2 + noise;
+  const int radius = 4;
+  LsmTemplate patch;
+  ASSERT_TRUE(ExtractLsmTemplate(
+      f, kTemplateXY, radius, Interpolation::kBilinear, &patch));
+  const Eigen::Matrix2d shape =
+      (Eigen::Matrix2d() << 1.02, 0.01, -0.02, 0.99).finished();
+  LsmParameters params = LsmParameters::At(kTemplateXY, shape);
+  params.r0 = 4;
+  params.r1 = 0.8;
+  LsmNormalEquations turned;
+  ASSERT_TRUE(BuildLsmNormalEquations(
+      patch, g, params, Interpolation::kBilinear, &turned));
+  const double n = turned.num_observations;
+  const double slope = (turned.sum_fg - turned.sum_f * turned.sum_g / n) /
+                       (turned.sum_gg - turned.sum_g * turned.sum_g / n);
+  ASSERT_TRUE(FitLsmRadiometry(0.05, &params, &turned));
+  EXPECT_NEAR(params.r1, slope, 1e-12);
+  EXPECT_NEAR(params.r0, (turned.sum_f - slope * turned.sum_g) / n, 1e-9);
+  // Near 1 / 0.6 at this shape (the resampling smooths g a little).
+  EXPECT_GT(params.r1, 1.2);
+  EXPECT_LT(params.r1, 1.8);
+  LsmNormalEquations rebuilt;
+  ASSERT_TRUE(BuildLsmNormalEquations(
+      patch, g, params, Interpolation::kBilinear, &rebuilt));
+  EXPECT_LT((turned.N - rebuilt.N).norm(), 1e-9 * rebuilt.N.norm());
+  EXPECT_LT((turned.rhs - rebuilt.rhs).norm(), 1e-9 * rebuilt.N.norm());
+  EXPECT_NEAR(
+      turned.residual_sq, rebuilt.residual_sq, 1e-9 * rebuilt.residual_sq);
+  // At the regression the residuals have no mean and no part along g.
+  EXPECT_NEAR(
+      rebuilt.rhs[kLsmR0], 0, 1e-7 * std::sqrt(rebuilt.N(kLsmR0, kLsmR0)));
+  EXPECT_NEAR(
+      rebuilt.rhs[kLsmR1], 0, 1e-7 * std::sqrt(rebuilt.N(kLsmR1, kLsmR1)));
+  // A search patch unrelated to the template keeps the least contrast given.
+  cv::Mat other(kImageSize, kImageSize, CV_32F);
+  cv::randu(other, 118, 138);
+  LsmParameters unrelated = LsmParameters::At(kTemplateXY);
+  LsmNormalEquations equations;
+  ASSERT_TRUE(BuildLsmNormalEquations(
+      patch, other, unrelated, Interpolation::kBilinear, &equations));
+  ASSERT_TRUE(FitLsmRadiometry(0.5, &unrelated, &equations));
+  EXPECT_EQ(unrelated.r1, 0.5);
+}
+
 TEST(Lsm, OneTemplateAgainstSeveralSearchPatches) {
   // One template, three search images with different shapes, radiometry
   // and one search patch off its image: each solution is independent, the
