@@ -125,6 +125,10 @@ int RunDense(int argc, char** argv) {
   app.add_option("--search_step_px",
                  options.search.step_px,
                  "Approximations: largest epipolar step between ray samples");
+  app.add_option("--search_stride",
+                 options.search.stride,
+                 "Approximations: every n-th ray sample first, then around "
+                 "the best peaks (1: every sample)");
   app.add_option("--min_ncc",
                  options.search.min_ncc,
                  "Smallest mean correlation of an approximation");

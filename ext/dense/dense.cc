@@ -37,6 +37,12 @@ DenseOptions::DenseOptions() {
   // steps give (rendered tower: 3510 points at RMS 1.00 GSD against 3571 at
   // 0.97), in half the time.
   search.step_px = 1.0;
+  // Every second sample first, then around the three best peaks: on the
+  // rendered tower 22 % less time for the whole command and 0.3 % more
+  // points at the same accuracy; on stereo-gt's cones and teddy as many
+  // points and blunders as every sample gives (every third sample: 29 %
+  // less time, but 8 % fewer points and twice the blunders on stereo-gt).
+  search.stride = 2;
   // Patch centres that move less than this between iterations have
   // converged: a fifth of the precision dense points reach.
   mpgc.convergence_px = 0.02;

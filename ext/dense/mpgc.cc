@@ -55,6 +55,9 @@ void EpipolarSearchOptions::Check() const {
       min_views >= 1, "EpipolarSearchOptions.min_views", ">= 1", min_views);
   CheckOption(
       best_views >= 0, "EpipolarSearchOptions.best_views", ">= 0", best_views);
+  CheckOption(stride >= 1, "EpipolarSearchOptions.stride", ">= 1", stride);
+  CheckOption(
+      num_peaks >= 1, "EpipolarSearchOptions.num_peaks", ">= 1", num_peaks);
 }
 
 const char* MpgcStatusName(MpgcStatus status) {
@@ -469,10 +472,12 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   for (size_t j = 0; j < search.size(); ++j) {
     shaped[j] = InducedShape(rays, search[j], middle, std::nullopt, &shapes[j]);
   }
+  // score -2: not scored (or seen in too few views).
   std::vector<double> score(n, -2);
   std::vector<int> views(n, 0);
   std::vector<double> correlations;
-  for (int k = 0; k < n; ++k) {
+  const auto score_sample = [&](int k) {
+    ++result.num_scored;
     const Eigen::Vector3d xyz = origin + distance_of(k) * direction;
     correlations.clear();
     for (size_t j = 0; j < search.size(); ++j) {
@@ -484,7 +489,7 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
       }
     }
     views[k] = static_cast<int>(correlations.size());
-    if (views[k] < options.min_views) continue;
+    if (views[k] < options.min_views) return;
     int used = views[k];
     if (options.best_views > 0 && options.best_views < used) {
       used = options.best_views;
@@ -496,6 +501,39 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
     score[k] = std::accumulate(
                    correlations.begin(), correlations.begin() + used, 0.0) /
                used;
+  };
+  const int stride = options.stride;
+  if (stride <= 1 || n <= 4 * stride) {
+    for (int k = 0; k < n; ++k) score_sample(k);
+  } else {
+    // The correlation peak of a high-passed window is a few samples wide:
+    // the coarse samples find the peaks, the fine ones around the best of
+    // them place each to a sample (and give the parabola its neighbours).
+    std::vector<int> coarse;
+    for (int k = 0; k < n; k += stride) coarse.push_back(k);
+    if (coarse.back() != n - 1) coarse.push_back(n - 1);
+    for (int k : coarse) score_sample(k);
+    std::vector<int> peaks;
+    for (size_t i = 0; i < coarse.size(); ++i) {
+      const double here = score[coarse[i]];
+      if (here <= -2) continue;
+      if ((i == 0 || here >= score[coarse[i - 1]]) &&
+          (i + 1 == coarse.size() || here >= score[coarse[i + 1]])) {
+        peaks.push_back(coarse[i]);
+      }
+    }
+    const size_t kept = std::min<size_t>(peaks.size(), options.num_peaks);
+    std::partial_sort(
+        peaks.begin(), peaks.begin() + kept, peaks.end(), [&](int a, int b) {
+          return score[a] > score[b];
+        });
+    for (size_t p = 0; p < kept; ++p) {
+      for (int k = std::max(0, peaks[p] - stride + 1);
+           k <= std::min(n - 1, peaks[p] + stride - 1);
+           ++k) {
+        if (k % stride != 0 && k != n - 1) score_sample(k);
+      }
+    }
   }
   const int best = static_cast<int>(
       std::max_element(score.begin(), score.end()) - score.begin());
@@ -503,9 +541,16 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   result.num_views = views[best];
   const int apart =
       static_cast<int>(std::ceil(options.window_radius / options.step_px));
-  for (int k = 1; k + 1 < n; ++k) {
-    if (std::abs(k - best) > apart && score[k] >= score[k - 1] &&
-        score[k] >= score[k + 1]) {
+  // Local maxima among the samples scored (a coarse sample between
+  // unscored ones is compared with the scored samples beside it).
+  std::vector<int> scored;
+  for (int k = 0; k < n; ++k) {
+    if (score[k] > -2) scored.push_back(k);
+  }
+  for (size_t i = 1; i + 1 < scored.size(); ++i) {
+    const int k = scored[i];
+    if (std::abs(k - best) > apart && score[k] >= score[scored[i - 1]] &&
+        score[k] >= score[scored[i + 1]]) {
       result.second_ncc = std::max(result.second_ncc, score[k]);
     }
   }

@@ -128,6 +128,11 @@ struct EpipolarSearchOptions {
   // views (0: all views where it projects inside), so that a view in which
   // the point is hidden or lit otherwise does not drown the others.
   int best_views = 0;
+  // Coarse to fine: where this is above 1, every stride-th sample is
+  // scored first, then every sample within a stride of the best num_peaks
+  // local maxima among those (1: every sample).
+  int stride = 1;
+  int num_peaks = 3;
   void Check() const;  // throws InputError naming field, value, rule
 };
 
@@ -141,7 +146,8 @@ struct EpipolarSearchResult {
   // repeats along the epipolar lines and the match is ambiguous. -2: none.
   double second_ncc = -2;
   int num_views = 0;
-  int num_samples = 0;
+  int num_samples = 0;  // along the ray
+  int num_scored = 0;   // of them, correlated (fewer with a stride)
 };
 
 EpipolarSearchResult SearchMasterRay(const MpgcView& master,
