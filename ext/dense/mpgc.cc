@@ -424,6 +424,26 @@ bool CorrelateAt(const LsmTemplate& window,
                                                    correlation);
 }
 
+// The entries of `samples` (indices into `score`, in order along the ray)
+// that were scored (above -2) and are at least as high as the entries
+// beside them in the list; the first and last entries count only where
+// with_ends.
+std::vector<int> LocalMaxima(const std::vector<double>& score,
+                             const std::vector<int>& samples,
+                             bool with_ends) {
+  std::vector<int> maxima;
+  const size_t last = samples.size() - 1;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const double here = score[samples[i]];
+    if (here <= -2 || (!with_ends && (i == 0 || i == last))) continue;
+    if ((i == 0 || here >= score[samples[i - 1]]) &&
+        (i == last || here >= score[samples[i + 1]])) {
+      maxima.push_back(samples[i]);
+    }
+  }
+  return maxima;
+}
+
 }  // namespace
 
 EpipolarSearchResult SearchMasterRay(const MpgcView& master,
@@ -513,15 +533,7 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
     for (int k = 0; k < n; k += stride) coarse.push_back(k);
     if (coarse.back() != n - 1) coarse.push_back(n - 1);
     for (int k : coarse) score_sample(k);
-    std::vector<int> peaks;
-    for (size_t i = 0; i < coarse.size(); ++i) {
-      const double here = score[coarse[i]];
-      if (here <= -2) continue;
-      if ((i == 0 || here >= score[coarse[i - 1]]) &&
-          (i + 1 == coarse.size() || here >= score[coarse[i + 1]])) {
-        peaks.push_back(coarse[i]);
-      }
-    }
+    std::vector<int> peaks = LocalMaxima(score, coarse, true);
     const size_t kept = std::min<size_t>(peaks.size(), options.num_peaks);
     std::partial_sort(
         peaks.begin(), peaks.begin() + kept, peaks.end(), [&](int a, int b) {
@@ -547,10 +559,8 @@ EpipolarSearchResult SearchMasterRay(const MpgcView& master,
   for (int k = 0; k < n; ++k) {
     if (score[k] > -2) scored.push_back(k);
   }
-  for (size_t i = 1; i + 1 < scored.size(); ++i) {
-    const int k = scored[i];
-    if (std::abs(k - best) > apart && score[k] >= score[scored[i - 1]] &&
-        score[k] >= score[scored[i + 1]]) {
+  for (int k : LocalMaxima(score, scored, false)) {
+    if (std::abs(k - best) > apart) {
       result.second_ncc = std::max(result.second_ncc, score[k]);
     }
   }
