@@ -94,7 +94,7 @@ TEST(Mpgc, AnOccludedSearchImageIsDropped) {
   // Something else in front of the point in search image 2 (view 3).
   Eigen::Vector2d xy;
   ASSERT_TRUE(scene.camera.ImgFromCam(scene.poses[3] * truth, &xy));
-  TextureOptions other;
+  WaveTextureOptions other;
   other.seed = 11;
   const cv::Mat occluder = RenderTemplateImage(WaveTexture(other), 40, 40);
   occluder.copyTo(scene.images[3](cv::Rect(

@@ -26,7 +26,7 @@ struct PlaneScene {
   std::vector<Rigid3d> poses;
   std::vector<cv::Mat> images;
   const WaveTexture texture{[] {
-    TextureOptions options;
+    WaveTextureOptions options;
     options.seed = 3;
     return options;
   }()};

@@ -30,7 +30,7 @@ struct Scene {
 
 Scene MakeScene() {
   Scene scene;
-  TextureOptions texture_options;
+  WaveTextureOptions texture_options;
   texture_options.seed = 4;
   const WaveTexture texture(texture_options);
   constexpr int kWidth = 420, kHeight = 320;

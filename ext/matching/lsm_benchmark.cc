@@ -40,7 +40,7 @@ struct Scene {
 const Scene& GetScene() {
   static const Scene scene = [] {
     Scene s;
-    TextureOptions texture_options;
+    WaveTextureOptions texture_options;
     texture_options.seed = 5;
     const WaveTexture texture(texture_options);
     s.template_image = RenderTemplateImage(texture, kImageSize, kImageSize);

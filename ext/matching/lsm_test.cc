@@ -77,7 +77,7 @@ struct TrialStatistics {
   double max_error = 0;
 };
 
-TrialStatistics RunTrials(const TextureOptions& texture_options,
+TrialStatistics RunTrials(const WaveTextureOptions& texture_options,
                           const TexturePairTruth& truth,
                           double sigma,
                           int num_trials,
@@ -141,7 +141,7 @@ TEST(Lsm, ReachesTheCramerRaoBoundUnbiasedWithHonestSigmas) {
   };
   for (const PrecisionCase& test : cases) {
     SCOPED_TRACE(test.name);
-    TextureOptions texture;
+    WaveTextureOptions texture;
     texture.seed = test.seed;
     texture.min_wavelength_px = 8;
     LsmOptions options;
@@ -183,7 +183,7 @@ TEST(Lsm, ReachesTheCramerRaoBoundUnbiasedWithHonestSigmas) {
 }
 
 TEST(Lsm, RecoversAffineAndRadiometryExactlyWithoutNoise) {
-  TextureOptions texture_options;
+  WaveTextureOptions texture_options;
   texture_options.seed = 11;
   const WaveTexture texture(texture_options);
   const TexturePairTruth truth =
@@ -238,7 +238,7 @@ TEST(Lsm, HoldsTheShiftAlongAStraightEdge) {
 TEST(Lsm, ReportsFlatPatchesAndPatchesOffTheImage) {
   cv::Mat flat(kImageSize, kImageSize, CV_32F, cv::Scalar(80));
   AddGaussianNoise(0.5, 3, &flat);
-  TextureOptions texture_options;
+  WaveTextureOptions texture_options;
   const WaveTexture texture(texture_options);
   const cv::Mat textured = RenderTemplateImage(texture, kImageSize, kImageSize);
   LsmOptions options;
@@ -265,7 +265,7 @@ TEST(Lsm, ReportsFlatPatchesAndPatchesOffTheImage) {
             LsmStatus::kOutsideImage);
   // A search patch of something else: diverges or fits badly, never a
   // confident match.
-  TextureOptions other_options;
+  WaveTextureOptions other_options;
   other_options.seed = 99;
   const cv::Mat other =
       RenderTemplateImage(WaveTexture(other_options), kImageSize, kImageSize);
@@ -442,7 +442,7 @@ TEST(Lsm, OneTemplateAgainstSeveralSearchPatches) {
   // One template, three search images with different shapes, radiometry
   // and one search patch off its image: each solution is independent, the
   // bad one is flagged and does not disturb the others.
-  TextureOptions texture_options;
+  WaveTextureOptions texture_options;
   texture_options.seed = 21;
   const WaveTexture texture(texture_options);
   cv::Mat f = RenderTemplateImage(texture, kImageSize, kImageSize);

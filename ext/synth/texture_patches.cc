@@ -8,7 +8,8 @@
 
 namespace bayon {
 
-WaveTexture::WaveTexture(const TextureOptions& options) : mean_(options.mean) {
+WaveTexture::WaveTexture(const WaveTextureOptions& options)
+    : mean_(options.mean) {
   std::mt19937 rng(options.seed);
   std::uniform_real_distribution<double> unit(0, 1);
   // Wavelengths uniform in log between the bounds, directions uniform;

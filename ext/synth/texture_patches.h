@@ -25,7 +25,7 @@
 
 namespace bayon {
 
-struct TextureOptions {
+struct WaveTextureOptions {
   int num_waves = 16;
   double min_wavelength_px = 5.0;
   double max_wavelength_px = 20.0;
@@ -37,7 +37,7 @@ struct TextureOptions {
 // A random texture, evaluated anywhere with its exact gradient.
 class WaveTexture {
  public:
-  explicit WaveTexture(const TextureOptions& options);
+  explicit WaveTexture(const WaveTextureOptions& options);
   double Value(const Eigen::Vector2d& p) const;
   Eigen::Vector2d Gradient(const Eigen::Vector2d& p) const;
 
