@@ -44,7 +44,7 @@ struct SyntheticViews {
 };
 
 SyntheticViews MakeViews(double noise_sigma) {
-  TextureOptions texture_options;
+  WaveTextureOptions texture_options;
   texture_options.seed = 11;
   const WaveTexture texture(texture_options);
   SyntheticViews views;
@@ -359,11 +359,12 @@ TEST(KeypointRefinement, WritesARefinedCopyOfTheDatabase) {
   EXPECT_EQ(output.ReadTwoViewGeometry(2, 3).inlier_matches,
             input.ReadTwoViewGeometry(2, 3).inlier_matches);
 
-  // The refined tracks agree: for the clean tracks (points 2..24), the
-  // texture positions of the three keypoints coincide after refinement far
-  // better than before.
-  double spread_before = 0, spread_after = 0;
-  int num_tracks = 0;
+  // The refined tracks agree: the texture positions of a clean track's
+  // three keypoints (points 2..24), up to 0.8 px apart before, coincide to a
+  // tenth of a pixel after, in every track but those with a rejected
+  // observation beyond the wrong point's three (which keeps its error).
+  double spread_before = 0;
+  int num_agreeing = 0;
   for (int k = 2; k < 25; ++k) {
     std::vector<Eigen::Vector2d> before, after;
     for (int view = 0; view < 3; ++view) {
@@ -372,17 +373,17 @@ TEST(KeypointRefinement, WritesARefinedCopyOfTheDatabase) {
       after.push_back(data.views.ToTexture(
           view, KeypointXY(output.ReadKeypoints(view + 1), k)));
     }
+    double track_after = 0;
     for (int a = 0; a < 3; ++a) {
       for (int b = a + 1; b < 3; ++b) {
         spread_before = std::max(spread_before, (before[a] - before[b]).norm());
-        spread_after = std::max(spread_after, (after[a] - after[b]).norm());
+        track_after = std::max(track_after, (after[a] - after[b]).norm());
       }
     }
-    ++num_tracks;
+    num_agreeing += track_after < 0.1;
   }
-  EXPECT_EQ(num_tracks, 23);
   EXPECT_GT(spread_before, 0.8);
-  EXPECT_LT(spread_after, 0.3);  // a rejected observation keeps its error
+  EXPECT_GE(num_agreeing, 23 - (summary.num_rejected - 3));
   // ... and most of them to a few hundredths of a pixel.
   EXPECT_LT(summary.num_rejected, 10);
 }
