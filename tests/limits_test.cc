@@ -305,8 +305,8 @@ class LimitsFullDiskTest : public ::testing::Test {
     disk_ = root_ + "/disk";
     fs::create_directories(disk_);
     if (::mount("tmpfs", disk_.c_str(), "tmpfs", 0, "size=4m") != 0) {
-      GTEST_SKIP() << "cannot mount a tmpfs on " << disk_ << ": "
-                   << std::strerror(errno) << " (needs root)";
+      BAYON_SKIP("cannot mount a tmpfs on "
+                 << disk_ << ": " << std::strerror(errno) << " (needs root)");
     }
     mounted_ = true;
   }
@@ -460,8 +460,9 @@ TEST(LimitsTest, ReadOnlyWorkspace) {
   std::vector<std::string> as_other_user;
   if (::geteuid() == 0) {
     if (!fs::exists("/usr/bin/setpriv")) {
-      GTEST_SKIP() << "running as root without setpriv: cannot drop the "
-                      "rights to write";
+      BAYON_SKIP(
+          "running as root without setpriv: cannot drop the "
+          "rights to write");
     }
     as_other_user = {
         "/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"};

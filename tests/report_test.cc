@@ -211,8 +211,9 @@ TEST(Report, ChromiumDrawsThePage) {
   BAYON_REQUIRE_DATA("temple-ring");
   const std::string chromium = FindChromium();
   if (chromium.empty()) {
-    GTEST_SKIP() << "chromium not installed (scripts/setup.sh installs it; "
-                    "or set BAYON_CHROMIUM)";
+    BAYON_SKIP(
+        "chromium not installed (scripts/setup.sh installs it; or set "
+        "BAYON_CHROMIUM)");
   }
   const std::string ws = testing::TemplePipelineWorkspace();
   const std::string dir = testing::TempDir("report_test/chromium");

@@ -28,6 +28,8 @@ std::string Setting(const char* name, const char* fallback) {
 
 }  // namespace
 
+bool StrictTests() { return Setting("BAYON_TEST_STRICT", "") == "1"; }
+
 std::string BayonBin() { return Setting("BAYON_BIN", BAYON_DEFAULT_BIN); }
 
 std::string DataDir() {

@@ -61,15 +61,29 @@ void CopyTree(const std::string& from, const std::string& to);
 // digit (e.g. import --camera_params).
 std::string CommaSeparated(const std::vector<double>& values);
 
+// Whether BAYON_TEST_STRICT=1 is set (CI sets it): then every skip fails.
+bool StrictTests();
+
 }  // namespace testing
 }  // namespace bayon
 
-// Skips the test with a clear message where ../shared/data is absent (a
-// user's own clone); in CI the folder always exists, so the test runs there.
-#define BAYON_REQUIRE_DATA(relative)                      \
-  do {                                                    \
-    if (::bayon::testing::DataPath(relative).empty()) {   \
-      GTEST_SKIP() << "shared test data '" << relative    \
-                   << "' not found (set BAYON_DATA_DIR)"; \
-    }                                                     \
+// Skips the test with `reason` (a program or a data folder this machine lacks,
+// say on a user's own clone), or, with BAYON_TEST_STRICT=1, fails it with that
+// reason: in CI everything is installed and the data is there, so a test that
+// cannot run is a broken setup, not a pass. For a TEST body or SetUp().
+#define BAYON_SKIP(reason)                                            \
+  do {                                                                \
+    if (::bayon::testing::StrictTests()) {                            \
+      GTEST_FAIL() << "cannot run (BAYON_TEST_STRICT=1): " << reason; \
+    }                                                                 \
+    GTEST_SKIP() << reason;                                           \
+  } while (0)
+
+// Skips (or in CI fails) the test where ../shared/data/<relative> is absent.
+#define BAYON_REQUIRE_DATA(relative)                                          \
+  do {                                                                        \
+    if (::bayon::testing::DataPath(relative).empty()) {                       \
+      BAYON_SKIP("shared test data '" << relative                             \
+                                      << "' not found (set BAYON_DATA_DIR)"); \
+    }                                                                         \
   } while (0)

@@ -150,8 +150,9 @@ TEST(TextureCommand, ViewDependentBlendingBeatsTheOptimalImageAlone) {
 // render_model_export_test.)
 TEST(TextureCommand, ExportsOpenInAnIndependentReader) {
   if (testing::RunCommand({"sh", "-c", "command -v assimp"}).exit_code != 0) {
-    GTEST_SKIP() << "assimp not installed (scripts/setup.sh installs "
-                    "assimp-utils)";
+    BAYON_SKIP(
+        "assimp not installed (scripts/setup.sh installs "
+        "assimp-utils)");
   }
   const std::string fixture = Tower();
   const std::string out = testing::TempDir("texture_exports");

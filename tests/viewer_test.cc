@@ -321,8 +321,9 @@ TEST_F(ViewerTest, BadModelsAreRefusedWithOneLine) {
 TEST_F(ViewerTest, ChromiumDrawsEveryMode) {
   const std::string chromium = FindChromium();
   if (chromium.empty()) {
-    GTEST_SKIP() << "chromium not installed (scripts/setup.sh installs it; "
-                    "or set BAYON_CHROMIUM)";
+    BAYON_SKIP(
+        "chromium not installed (scripts/setup.sh installs it; or set "
+        "BAYON_CHROMIUM)");
   }
   const std::string out = dir_ + "/viewer";
   const auto result =
@@ -428,8 +429,9 @@ TEST_F(ViewerTest, ChromiumDrawsEveryMode) {
 TEST_F(ViewerTest, ChromiumMatchesARenderOrbitView) {
   const std::string chromium = FindChromium();
   if (chromium.empty()) {
-    GTEST_SKIP() << "chromium not installed (scripts/setup.sh installs it; "
-                    "or set BAYON_CHROMIUM)";
+    BAYON_SKIP(
+        "chromium not installed (scripts/setup.sh installs it; or set "
+        "BAYON_CHROMIUM)");
   }
   // bayon render's textured orbit view (the library calls the command makes)
   // and the page in a window of the same size with the same view.
@@ -503,8 +505,9 @@ TEST_F(ViewerTest, ChromiumReportsBadUrlParameters) {
   // The error channels the test above relies on, seen to work.
   const std::string chromium = FindChromium();
   if (chromium.empty()) {
-    GTEST_SKIP() << "chromium not installed (scripts/setup.sh installs it; "
-                    "or set BAYON_CHROMIUM)";
+    BAYON_SKIP(
+        "chromium not installed (scripts/setup.sh installs it; or set "
+        "BAYON_CHROMIUM)");
   }
   const std::string out = dir_ + "/viewer";
   ASSERT_EQ(
