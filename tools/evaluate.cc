@@ -8,6 +8,7 @@
 // same similarity as the cameras (with --align 1 and --input_path); without
 // a sparse model they are taken to be in the truth's datum already.
 #include "ext/colmap/calibration_json.h"
+#include "ext/colmap/database.h"
 #include "ext/colmap/model_io.h"
 #include "ext/colmap/ply_io.h"
 #include "ext/core/errors.h"
@@ -15,6 +16,7 @@
 #include "ext/eval/calibration_eval.h"
 #include "ext/eval/cloud_edit_eval.h"
 #include "ext/eval/mesh_distance.h"
+#include "ext/eval/relative_eval.h"
 #include "ext/eval/sparse_eval.h"
 #include "ext/eval/surface_eval.h"
 #include "ext/eval/texture_eval.h"
@@ -74,6 +76,35 @@ Json SparseToJson(const SparseEvaluation& e) {
          {"registered", image.registered},
          {"center_error", image.center_error},
          {"rotation_error_deg", image.rotation_error_deg}});
+  }
+  return json;
+}
+
+Json RelativeToJson(const RelativeEvaluation& e) {
+  Json json = {{"num_pairs", e.num_pairs},
+               {"num_oriented", e.num_oriented},
+               {"median_rotation_error_deg", e.median_rotation_error_deg},
+               {"max_rotation_error_deg", e.max_rotation_error_deg},
+               {"max_base_error_deg", e.max_base_error_deg},
+               {"max_rotation_ratio", e.max_rotation_ratio},
+               {"max_base_ratio", e.max_base_ratio},
+               {"pairs", Json::array()}};
+  for (const PairEvaluation& pair : e.pairs) {
+    Json p = {{"image1", pair.name1},
+              {"image2", pair.name2},
+              {"oriented", pair.oriented}};
+    if (pair.oriented) {
+      p["num_matches"] = pair.num_matches;
+      p["num_inliers"] = pair.num_inliers;
+      p["sigma0_px"] = pair.sigma0_px;
+      p["rotation_error_deg"] = pair.rotation_error_deg;
+      p["std_rotation_deg"] = pair.std_rotation_deg;
+      p["base_error_deg"] = pair.base_error_deg;
+      p["std_base_deg"] = pair.std_base_deg;
+    } else {
+      p["reason"] = pair.reason;
+    }
+    json["pairs"].push_back(p);
   }
   return json;
 }
@@ -242,9 +273,9 @@ void Transform(const Sim3d& b_from_a, PointCloud* cloud) {
 int RunEvaluate(int argc, char** argv) {
   std::string input_path, ground_truth_path, output_path, label;
   std::string calibration_path, surface_path, cloud_path, mesh_path;
-  std::string cloud_errors_path, edit_input_path;
+  std::string cloud_errors_path, edit_input_path, database_path;
   std::string textured_mesh_path, texture_path, heldout_path, render_path;
-  bool align = true;
+  bool align = true, adjacent_pairs = false;
   double gsd_m = 0, threshold_m = 0, threshold_gsd = 2;
   // synth_cloud's smallest blunder offset: an unflagged point as far off is
   // as much a blunder as an injected one.
@@ -257,7 +288,9 @@ int RunEvaluate(int argc, char** argv) {
       "similarity, calibration per parameter, 3D points against the true "
       "surface), a dense cloud and a mesh (accuracy, completeness over the "
       "visible true surface, topology) and a textured model (PSNR and SSIM "
-      "of renders from held-out viewpoints). Prints tables, writes JSON.");
+      "of renders from held-out viewpoints), and a database's pair "
+      "orientations (rotation and base direction errors). Prints tables, "
+      "writes JSON.");
   CLI::App& app = command.app();
   app.add_option("--ground_truth_path",
                  ground_truth_path,
@@ -267,6 +300,14 @@ int RunEvaluate(int argc, char** argv) {
   app.add_option("--calibration_path",
                  calibration_path,
                  "calibration.json of the model (default: the one beside it)");
+  app.add_option("--database_path",
+                 database_path,
+                 "Database whose pair orientations (`bayon relative`) to "
+                 "evaluate");
+  app.add_option("--adjacent_pairs",
+                 adjacent_pairs,
+                 "With --database_path, 1: only neighbouring images in the "
+                 "database's order, the last with the first (a ring)");
   app.add_option("--cloud_path", cloud_path, "Dense cloud (PLY) to evaluate");
   app.add_option("--cloud_errors_path",
                  cloud_errors_path,
@@ -319,10 +360,13 @@ int RunEvaluate(int argc, char** argv) {
   if (!command.Parse(argc, argv)) return 0;
 
   if (input_path.empty() && cloud_path.empty() && mesh_path.empty() &&
-      textured_mesh_path.empty()) {
+      textured_mesh_path.empty() && database_path.empty()) {
     ThrowInputError(
         "nothing to evaluate: give --input_path, --cloud_path, "
-        "--mesh_path or --textured_mesh_path");
+        "--mesh_path, --textured_mesh_path or --database_path");
+  }
+  if (!database_path.empty()) {
+    CheckFileExists(database_path, "--database_path");
   }
   if (!edit_input_path.empty()) {
     if (cloud_path.empty()) {
@@ -345,10 +389,22 @@ int RunEvaluate(int argc, char** argv) {
   }
   if (gsd_m <= 0) gsd_m = synth_gsd_m;
   const Scene truth = ReadModel(found.model);
-  const std::string name = label.empty() ? input_path : label;
+  const std::string name =
+      !label.empty() ? label
+                     : (!input_path.empty() ? input_path : database_path);
 
   Json report;
   report["ground_truth_path"] = ground_truth_path;
+  if (!database_path.empty()) {
+    report["database_path"] = database_path;
+    Database database(database_path, Database::Mode::kReadOnly);
+    RelativeEvaluationOptions options;
+    options.adjacent_only = adjacent_pairs;
+    const RelativeEvaluation relative =
+        EvaluateRelativeOrientations(&database, truth, options);
+    std::printf("%s", RelativeEvaluationTable(name, relative).c_str());
+    report["relative"] = RelativeToJson(relative);
+  }
   Sim3d truth_from_model;  // identity unless a sparse model is aligned
   std::optional<Scene> model;
   if (!input_path.empty()) {
