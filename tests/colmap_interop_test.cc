@@ -13,6 +13,7 @@
 
 #include <filesystem>
 
+#include "tests/temple_fixture.h"
 #include "tests/testing.h"
 
 namespace fs = std::filesystem;
@@ -20,52 +21,36 @@ namespace fs = std::filesystem;
 namespace bayon {
 namespace {
 
-// Stock COLMAP features and exhaustive matches of the temple ring, on the
-// CPU, plus a mapper model: built once, shared by the tests below.
-std::string TempleColmapFixture() {
-  return testing::SharedFixture("temple_colmap", [](const std::string& dir) {
-    const std::string images = testing::DataPath("temple-ring");
-    const std::string db = dir + "/database.db";
-    auto run = [&](const std::vector<std::string>& args) {
-      const testing::CommandResult result = testing::RunColmap(args);
-      ASSERT_EQ(result.exit_code, 0) << result.output;
-    };
-    run({"feature_extractor",
-         "--database_path",
-         db,
-         "--image_path",
-         images,
-         "--SiftExtraction.use_gpu",
-         "0",
-         "--SiftExtraction.num_threads",
-         "2"});
-    run({"exhaustive_matcher",
-         "--database_path",
-         db,
-         "--SiftMatching.use_gpu",
-         "0",
-         "--SiftMatching.num_threads",
-         "2"});
-    fs::create_directories(dir + "/sparse");
-    run({"mapper",
-         "--database_path",
-         db,
-         "--image_path",
-         images,
-         "--output_path",
-         dir + "/sparse",
-         "--Mapper.num_threads",
-         "2"});
-    ASSERT_TRUE(fs::exists(dir + "/sparse/0/images.bin"));
-    fs::create_directories(dir + "/txt");
-    run({"model_converter",
-         "--input_path",
-         dir + "/sparse/0",
-         "--output_path",
-         dir + "/txt",
-         "--output_type",
-         "TXT"});
-  });
+// Stock COLMAP's database and mapper model of the temple ring (the tests'
+// one COLMAP run of it, temple_fixture.h), and the model as COLMAP's
+// model_converter writes it in text: <dir>/txt.
+struct StockTemple {
+  std::string database;
+  std::string model;
+  std::string txt;
+};
+
+StockTemple StockTempleFixture() {
+  StockTemple temple;
+  const testing::TempleColmap colmap = testing::TempleColmapFixture();
+  temple.database = colmap.database;
+  temple.model = colmap.model;
+  temple.txt =
+      testing::SharedFixture("interop_temple_txt",
+                             [&](const std::string& dir) {
+                               fs::create_directories(dir + "/txt");
+                               const testing::CommandResult result =
+                                   testing::RunColmap({"model_converter",
+                                                       "--input_path",
+                                                       colmap.model,
+                                                       "--output_path",
+                                                       dir + "/txt",
+                                                       "--output_type",
+                                                       "TXT"});
+                               ASSERT_EQ(result.exit_code, 0) << result.output;
+                             }) +
+      "/txt";
+  return temple;
 }
 
 int64_t Count(SqliteConnection* db, const std::string& sql) {
@@ -74,15 +59,17 @@ int64_t Count(SqliteConnection* db, const std::string& sql) {
 
 TEST(ColmapInterop, ReadsEveryTableOfAStockDatabase) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string fixture = TempleColmapFixture();
-  const std::string db_path = fixture + "/database.db";
+  const StockTemple fixture = StockTempleFixture();
+  const std::string db_path = fixture.database;
   const auto before = testing::HashTree(db_path);
   Database db(db_path, Database::Mode::kReadOnly);
   EXPECT_EQ(db.schema(), DatabaseSchema::kColmap38);
   SqliteConnection sql(db_path, SqliteConnection::Mode::kReadOnly);
 
   EXPECT_EQ(db.NumCameras(), Count(&sql, "SELECT count(*) FROM cameras"));
-  EXPECT_EQ(db.ReadAllCameras().size(), 16u);
+  // One camera for the ring (compare_colmap runs COLMAP with
+  // --ImageReader.single_camera 1).
+  EXPECT_EQ(db.ReadAllCameras().size(), 1u);
   const std::vector<DatabaseImage> images = db.ReadAllImages();
   ASSERT_EQ(images.size(), 16u);
   int64_t num_keypoints = 0, num_descriptors = 0;
@@ -116,11 +103,11 @@ TEST(ColmapInterop, ReadsEveryTableOfAStockDatabase) {
 
 TEST(ColmapInterop, RewritesAStockDatabaseRowByRowAndBlobByBlob) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string fixture = TempleColmapFixture();
+  const StockTemple fixture = StockTempleFixture();
   const std::string dir = testing::TempDir("interop_rewrite");
   const std::string copy = dir + "/copy.db";
   {
-    Database src(fixture + "/database.db", Database::Mode::kReadOnly);
+    Database src(fixture.database, Database::Mode::kReadOnly);
     Database dst(copy, Database::Mode::kCreate);
     auto transaction = dst.BeginTransaction();
     for (const Camera& camera : src.ReadAllCameras())
@@ -142,7 +129,7 @@ TEST(ColmapInterop, RewritesAStockDatabaseRowByRowAndBlobByBlob) {
     transaction.Commit();
   }
   SqliteConnection sql(copy, SqliteConnection::Mode::kReadWrite);
-  sql.Execute("ATTACH DATABASE '" + fixture + "/database.db' AS stock");
+  sql.Execute("ATTACH DATABASE '" + fixture.database + "' AS stock");
   for (const char* table : {"cameras",
                             "images",
                             "keypoints",
@@ -173,35 +160,34 @@ TEST(ColmapInterop, RewritesAStockDatabaseRowByRowAndBlobByBlob) {
 
 TEST(ColmapInterop, MapperModelsRoundTripByteForByte) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string fixture = TempleColmapFixture();
+  const StockTemple fixture = StockTempleFixture();
   const std::string dir = testing::TempDir("interop_models");
   // Binary: COLMAP's mapper output through bayon and back.
-  const Scene from_bin = ReadModel(fixture + "/sparse/0");
+  const Scene from_bin = ReadModel(fixture.model);
   fs::create_directories(dir + "/bin");
   WriteModel(from_bin, dir + "/bin", ModelFormat::kBinary);
   for (const char* file : {"cameras.bin", "images.bin", "points3D.bin"}) {
     EXPECT_EQ(ReadFileToString(dir + "/bin/" + file),
-              ReadFileToString(fixture + "/sparse/0/" + file))
+              ReadFileToString(fixture.model + "/" + file))
         << file;
   }
   // Text: COLMAP's model_converter output through bayon and back.
-  const Scene from_txt = ReadModel(fixture + "/txt");
+  const Scene from_txt = ReadModel(fixture.txt);
   fs::create_directories(dir + "/txt");
   WriteModel(from_txt, dir + "/txt", ModelFormat::kText);
   for (const char* file : {"cameras.txt", "images.txt", "points3D.txt"}) {
     EXPECT_EQ(ReadFileToString(dir + "/txt/" + file),
-              ReadFileToString(fixture + "/txt/" + file))
+              ReadFileToString(fixture.txt + "/" + file))
         << file;
   }
   // The bayon command does the same.
-  const testing::CommandResult converted =
-      testing::RunBayon({"model_converter",
-                         "--input_path",
-                         fixture + "/sparse/0",
-                         "--output_path",
-                         dir + "/cmd_txt",
-                         "--output_type",
-                         "TXT"});
+  const testing::CommandResult converted = testing::RunBayon({"model_converter",
+                                                              "--input_path",
+                                                              fixture.model,
+                                                              "--output_path",
+                                                              dir + "/cmd_txt",
+                                                              "--output_type",
+                                                              "TXT"});
   ASSERT_EQ(converted.exit_code, 0) << converted.output;
   fs::create_directories(dir + "/lib_txt");
   WriteModel(from_bin, dir + "/lib_txt", ModelFormat::kText);

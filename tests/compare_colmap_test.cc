@@ -3,9 +3,11 @@
 // `bayon compare_colmap` end to end on the temple ring (16 x 640x480, real
 // photographs with Middlebury's calibration as truth): the workspace
 // `bayon pipeline` makes of it, then stock COLMAP beside it through the
-// command; the table's figures within the ranges the benchmark measured,
-// the workspace's own database and model untouched, a second run reusing
-// COLMAP's model, and bad input refused before COLMAP runs.
+// command (the tests' one stock COLMAP run of the temple,
+// TempleColmapFixture in temple_fixture.h); the table's figures within the
+// ranges the benchmark measured, the workspace's own database and model
+// untouched, a second run reusing COLMAP's model, and bad input refused before
+// COLMAP runs.
 #include "ext/colmap/model_io.h"
 #include "ext/core/file_util.h"
 
@@ -16,7 +18,6 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <stdexcept>
 
 #include "tests/temple_fixture.h"
 #include "tests/testing.h"
@@ -28,54 +29,15 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-// Every file's name and content hash, one per line.
-std::string TreeDigest(const std::string& path) {
-  std::string digest;
-  for (const auto& [name, hash] : testing::HashTree(path)) {
-    digest += name + " " + std::to_string(hash) + "\n";
-  }
-  return digest;
-}
-
-// dir/ws: a copy of the workspace `bayon pipeline` made of the ring (the
-// calibrated camera, all pairs matched, free network), then compare_colmap
-// run once against the truth, its output in dir/compare.txt and the hashes
-// of the workspace's database and model before it in dir/*.hash.
-std::string TempleFixture() {
-  return testing::SharedFixture(
-      "compare_colmap_temple", [](const std::string& dir) {
-        const std::string ws = dir + "/ws";
-        testing::CopyTree(testing::TemplePipelineWorkspace(), ws);
-        WriteFileAtomically(
-            dir + "/database.hash",
-            std::to_string(FileHash(ws + "/database.db")) + "\n");
-        WriteFileAtomically(dir + "/adjusted.hash",
-                            TreeDigest(ws + "/sparse/adjusted"));
-        const testing::CommandResult result =
-            testing::RunBayon({"compare_colmap",
-                               "--workspace_path",
-                               ws,
-                               "--ground_truth_path",
-                               testing::TempleConfigFixture().truth,
-                               "--num_threads",
-                               "2"});
-        WriteFileAtomically(dir + "/compare.txt", result.output);
-        if (result.exit_code != 0) {
-          throw std::runtime_error("bayon compare_colmap failed:\n" +
-                                   result.output);
-        }
-      });
-}
-
 Json ReadJson(const std::string& path) {
   return Json::parse(ReadFileToString(path));
 }
 
 TEST(CompareColmap, TempleRingSideBySide) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string dir = TempleFixture();
-  const std::string ws = dir + "/ws";
-  const std::string output = ReadFileToString(dir + "/compare.txt");
+  const testing::TempleColmap fixture = testing::TempleColmapFixture();
+  const std::string& ws = fixture.workspace;
+  const std::string& output = fixture.output;
   std::cout << output;
 
   const Json c = ReadJson(ws + "/colmap/comparison.json");
@@ -188,12 +150,11 @@ TEST(CompareColmap, TempleRingSideBySide) {
 
 TEST(CompareColmap, LeavesTheWorkspaceDatabaseAndModelAlone) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string dir = TempleFixture();
-  const std::string ws = dir + "/ws";
-  EXPECT_EQ(ReadFileToString(dir + "/database.hash"),
-            std::to_string(FileHash(ws + "/database.db")) + "\n");
-  EXPECT_EQ(ReadFileToString(dir + "/adjusted.hash"),
-            TreeDigest(ws + "/sparse/adjusted"));
+  const testing::TempleColmap fixture = testing::TempleColmapFixture();
+  const std::string& ws = fixture.workspace;
+  EXPECT_EQ(fixture.database_digest, testing::TreeDigest(ws + "/database.db"));
+  EXPECT_EQ(fixture.adjusted_digest,
+            testing::TreeDigest(ws + "/sparse/adjusted"));
   // COLMAP worked on its own database.
   EXPECT_TRUE(fs::exists(ws + "/colmap/database.db"));
   const Json record = ReadJson(ws + "/colmap/colmap.json");
@@ -203,9 +164,9 @@ TEST(CompareColmap, LeavesTheWorkspaceDatabaseAndModelAlone) {
 
 TEST(CompareColmap, SecondRunReusesColmapsModel) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string fixture = TempleFixture();
+  const testing::TempleColmap fixture = testing::TempleColmapFixture();
   const std::string dir = testing::TempDir("compare_colmap_reuse");
-  testing::CopyTree(fixture + "/ws", dir + "/ws");
+  testing::CopyTree(fixture.workspace, dir + "/ws");
   const std::string ws = dir + "/ws";
   const auto colmap_before = testing::HashTree(ws + "/colmap/sparse");
   const uint64_t colmap_db = FileHash(ws + "/colmap/database.db");

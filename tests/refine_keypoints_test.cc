@@ -2,7 +2,8 @@
 //
 // bayon refine_keypoints end to end (issue 5): a stock COLMAP database of
 // the real temple ring (SIFT from `colmap feature_extractor`,
-// `exhaustive_matcher`), refined by least-squares matching; stock `colmap
+// `exhaustive_matcher`: the tests' one COLMAP run of it, temple_fixture.h),
+// refined by least-squares matching; stock `colmap
 // mapper` on both databases, judged with `bayon evaluate` against the
 // calibrated cameras (`bayon import_ground_truth`). Bad input: one line,
 // exit code 2, the input unchanged.
@@ -17,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/temple_fixture.h"
 #include "tests/testing.h"
 
 namespace fs = std::filesystem;
@@ -36,41 +38,6 @@ void RunColmapOk(const std::vector<std::string>& args) {
 
 nlohmann::json ReadJson(const std::string& path) {
   return nlohmann::json::parse(ReadFileToString(path));
-}
-
-// The stock COLMAP database of the temple ring and its true cameras. One
-// thread each, so that the matcher's RANSAC (and so the tracks) is the same
-// in every run.
-std::string TempleSiftFixture() {
-  return testing::SharedFixture("temple_sift", [](const std::string& dir) {
-    const std::string images = testing::DataPath("temple-ring");
-    const std::string db = dir + "/database.db";
-    RunColmapOk({"feature_extractor",
-                 "--database_path",
-                 db,
-                 "--image_path",
-                 images,
-                 "--ImageReader.single_camera",
-                 "1",
-                 "--SiftExtraction.use_gpu",
-                 "0",
-                 "--SiftExtraction.num_threads",
-                 "1"});
-    RunColmapOk({"exhaustive_matcher",
-                 "--database_path",
-                 db,
-                 "--SiftMatching.use_gpu",
-                 "0",
-                 "--SiftMatching.num_threads",
-                 "1"});
-    RunBayonOk({"import_ground_truth",
-                "--format",
-                "middlebury",
-                "--input_path",
-                images + "/templeSR_par.txt",
-                "--output_path",
-                dir + "/truth"});
-  });
 }
 
 struct MapperResult {
@@ -129,8 +96,8 @@ MapperResult MapAndEvaluate(const std::string& database_path,
 
 TEST(RefineKeypoints, TempleMapsWithLowerReprojectionErrorAndNoWorsePoses) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string fixture = TempleSiftFixture();
-  const std::string stock_db = fixture + "/database.db";
+  const std::string stock_db = testing::TempleColmapFixture().database;
+  const std::string truth = testing::TempleConfigFixture().truth;
   const std::string dir = testing::TempDir("refine_keypoints_temple");
   const std::string refined_db = dir + "/refined.db";
   const uint64_t stock_hash = FileHash(stock_db);
@@ -184,10 +151,9 @@ TEST(RefineKeypoints, TempleMapsWithLowerReprojectionErrorAndNoWorsePoses) {
     EXPECT_GE(num_moved, 0.99 * num_refined);
   }
 
-  const MapperResult stock =
-      MapAndEvaluate(stock_db, fixture + "/truth", dir + "/stock");
+  const MapperResult stock = MapAndEvaluate(stock_db, truth, dir + "/stock");
   const MapperResult refined =
-      MapAndEvaluate(refined_db, fixture + "/truth", dir + "/refined");
+      MapAndEvaluate(refined_db, truth, dir + "/refined");
   std::printf(
       "%-10s %10s %10s %12s %10s\n%-10s %10d %10.4f %12.6g %10.4f\n"
       "%-10s %10d %10.4f %12.6g %10.4f\n",
@@ -217,8 +183,7 @@ TEST(RefineKeypoints, TempleMapsWithLowerReprojectionErrorAndNoWorsePoses) {
 
 TEST(RefineKeypoints, BadInputIsOneLineExitTwoAndTheInputUnchanged) {
   BAYON_REQUIRE_DATA("temple-ring");
-  const std::string fixture = TempleSiftFixture();
-  const std::string stock_db = fixture + "/database.db";
+  const std::string stock_db = testing::TempleColmapFixture().database;
   const std::string images = testing::DataPath("temple-ring");
   const std::string dir = testing::TempDir("refine_keypoints_bad");
   const uint64_t stock_hash = FileHash(stock_db);

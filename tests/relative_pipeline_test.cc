@@ -25,6 +25,7 @@
 #include <filesystem>
 #include <map>
 
+#include "tests/temple_fixture.h"
 #include "tests/testing.h"
 
 namespace fs = std::filesystem;
@@ -295,29 +296,9 @@ TEST(RelativePipeline, StockMapperRegistersTheTempleFromBayonsDatabase) {
   const std::string bayon_model =
       RunStockMapper(db, images, dir + "/bayon", mapper_options);
 
-  // Stock COLMAP from the images.
-  fs::create_directories(dir + "/sift");
-  const std::string sift_db = dir + "/sift/database.db";
-  for (const std::vector<std::string>& args :
-       std::vector<std::vector<std::string>>{{"feature_extractor",
-                                              "--database_path",
-                                              sift_db,
-                                              "--image_path",
-                                              images,
-                                              "--SiftExtraction.use_gpu",
-                                              "0",
-                                              "--SiftExtraction.num_threads",
-                                              "2"},
-                                             {"exhaustive_matcher",
-                                              "--database_path",
-                                              sift_db,
-                                              "--SiftMatching.use_gpu",
-                                              "0",
-                                              "--SiftMatching.num_threads",
-                                              "2"}}) {
-    const testing::CommandResult result = testing::RunColmap(args);
-    ASSERT_EQ(result.exit_code, 0) << result.output;
-  }
+  // Stock COLMAP from the images: the tests' one run of its SIFT features
+  // and exhaustive matches of the ring (temple_fixture.h).
+  const std::string sift_db = testing::TempleColmapFixture().database;
   const std::string sift_model =
       RunStockMapper(sift_db, images, dir + "/sift", kWeakPoseMapper);
 
