@@ -38,7 +38,9 @@ esac
   echo "demo.sh: $images not found (set BAYON_DATA_DIR to the data folder)" >&2
   exit 2
 }
-scripts/setup.sh
+# Only the program the demo runs (with its viewer page): the tests are
+# scripts/test.sh's to build.
+scripts/setup.sh --target bayon
 bayon=build/tools/bayon
 # Only a previous demo's workspace is replaced, never another folder.
 if [ -e "$ws" ]; then

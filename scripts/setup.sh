@@ -6,14 +6,23 @@
 #   scripts/setup.sh --sanitize   AddressSanitizer + UBSan build with clang into
 #                                 build-asan/, with the libFuzzer harnesses of
 #                                 tests/fuzz (scripts/fuzz.sh runs them)
+#   scripts/setup.sh --target bayon only the `bayon` program (with its viewer
+#                                 page), not the tests (scripts/demo.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 build_dir=build
 sanitize=0
 cmake_args=(-DCMAKE_BUILD_TYPE=Release)
-for arg in "$@"; do
+targets=()
+while [ $# -gt 0 ]; do
+  arg=$1
+  shift
   case "$arg" in
+    --target)
+      [ $# -gt 0 ] || { echo "setup.sh: --target needs a target name" >&2; exit 2; }
+      targets+=(--target "$1")
+      shift ;;
     --sanitize)
       # clang, because libFuzzer comes with it; line tables only, because full
       # debug information doubles the build time and stack traces need no more.
@@ -29,7 +38,7 @@ for arg in "$@"; do
 done
 
 packages=(
-  build-essential cmake ninja-build pkg-config git ccache
+  build-essential cmake ninja-build pkg-config git ccache clang-format
   colmap sqlite3 libsqlite3-dev
   libeigen3-dev libceres-dev libgoogle-glog-dev libopencv-dev
   libpcl-dev libcgal-dev libopenmesh-dev libtbb-dev
@@ -59,10 +68,18 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 if command -v ccache >/dev/null; then
-  cmake_args+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  # One compiler cache for every clone on this machine (CI builds a fresh
+  # clone in another folder): paths under the clone are hashed relative to it
+  # (base_dir), the working directory not at all (hash_dir), and __FILE__
+  # names files relative to the clone (-ffile-prefix-map), so the same source
+  # in another folder hits. The launcher carries the settings, so a later
+  # `cmake --build` or `ninja` uses them too.
+  launcher="$(command -v cmake);-E;env;CCACHE_BASEDIR=$PWD;CCACHE_NOHASHDIR=1;$(command -v ccache)"
+  cmake_args+=("-DCMAKE_CXX_COMPILER_LAUNCHER=$launcher" "-DCMAKE_C_COMPILER_LAUNCHER=$launcher"
+               "-DCMAKE_CXX_FLAGS_INIT=-ffile-prefix-map=$PWD/=")
 fi
 if [ ! -f "$build_dir/build.ninja" ]; then
   cmake -S . -B "$build_dir" -G Ninja "${cmake_args[@]}" >/dev/null
 fi
-cmake --build "$build_dir" -j"$(nproc)"
+cmake --build "$build_dir" -j"$(nproc)" "${targets[@]}"
 echo "setup: bayon is built in $build_dir/ ($build_dir/tools/bayon)"
