@@ -5,7 +5,8 @@
 # TARGET is a harness name without its fuzz_ prefix or with it (database_file
 # or fuzz_database_file); `scripts/fuzz.sh list 0` lists them. Builds
 # build-asan/ if needed (scripts/setup.sh --sanitize) and the harnesses
-# themselves. Each target runs one process (no -jobs) on a working corpus
+# themselves. Each target runs one process (no -jobs), as many targets at a
+# time as there are cores (BAYON_FUZZ_JOBS), on a working corpus
 # build-asan/fuzz/<target>/corpus seeded from tests/fuzz/corpus/<target>,
 # also reading tests/fuzz/regressions/<target>; crash, leak, timeout and
 # out-of-memory inputs go to build-asan/fuzz/<target>/artifacts. Prints one
@@ -67,21 +68,23 @@ if ! output=$(flock "$lock" ninja -C "$build" -j2 "${executables[@]}" 2>&1); the
   exit 2
 fi
 
-status=0
-for target in "${targets[@]}"; do
-  dir=$build/fuzz/$target
+# fuzz_one TARGET: one harness for $seconds; its line in $build/fuzz/TARGET/result,
+# and status 1 on a finding or a failed run.
+fuzz_one() {
+  local target=$1
+  local dir=$build/fuzz/$target
   mkdir -p "$dir/corpus" "$dir/artifacts"
-  rm -rf "$dir/tmp"
+  rm -rf "$dir/tmp" "$dir/result"
   mkdir -p "$dir/tmp"
   # The seeds join the working corpus (which keeps what earlier runs found).
   cp -n tests/fuzz/corpus/"$target"/* "$dir/corpus/" 2>/dev/null || true
-  inputs=("$dir/corpus")
+  local inputs=("$dir/corpus")
   if [ -d "tests/fuzz/regressions/$target" ]; then
     inputs+=("tests/fuzz/regressions/$target")
   fi
+  local before after findings executions last cov exec_s corpus result rc=0
   before=$(find "$dir/artifacts" -type f ! -name 'slow-unit-*' | wc -l)
-  log=$dir/fuzz.log
-  rc=0
+  local log=$dir/fuzz.log
   # OpenCV allocates what an image header claims, up to 2^30 pixels by
   # default: 2^22 keeps forged headers under the memory limit.
   TMPDIR=$PWD/$dir/tmp \
@@ -90,7 +93,7 @@ for target in "${targets[@]}"; do
   UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1} \
     "$build/tests/fuzz/fuzz_$target" "${inputs[@]}" \
       -max_total_time="$seconds" -rss_limit_mb=2560 -timeout=30 \
-      -artifact_prefix="$dir/artifacts/" -print_final_stats=1 "$@" \
+      -artifact_prefix="$dir/artifacts/" -print_final_stats=1 "${flags[@]}" \
       >"$log" 2>&1 || rc=$?
   rm -rf "$dir/tmp"
   after=$(find "$dir/artifacts" -type f ! -name 'slow-unit-*' | wc -l)
@@ -101,6 +104,7 @@ for target in "${targets[@]}"; do
   exec_s=$(sed -n 's/.* exec\/s: \([0-9]*\).*/\1/p' <<<"$last")
   corpus=$(find "$dir/corpus" -type f | wc -l)
   result=ok
+  local status=0
   if [ "$findings" -gt 0 ]; then
     result="FINDING: $(grep -a -m1 -E '^==[0-9]+==ERROR|runtime error|deadly signal|out-of-memory|timeout after|detected memory leaks|malloc\(' "$log" || echo "see $log")"
     status=1
@@ -110,6 +114,24 @@ for target in "${targets[@]}"; do
   fi
   printf 'fuzz_%s: %ss, %s executions (%s/s), corpus %s, cov %s, findings %s: %s\n' \
     "$target" "$seconds" "${executions:-0}" "${exec_s:-0}" "$corpus" \
-    "${cov:-?}" "$findings" "$result"
+    "${cov:-?}" "$findings" "$result" >"$dir/result"
+  return $status
+}
+
+# One harness per core at a time (each is one process), the lines in the
+# targets' order.
+flags=("$@")
+jobs_max=${BAYON_FUZZ_JOBS:-$(nproc)}
+pids=()
+for target in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+  fuzz_one "$target" &
+  pids+=($!)
+done
+status=0
+for i in "${!targets[@]}"; do
+  wait "${pids[$i]}" || status=1
+  cat "$build/fuzz/${targets[$i]}/result" 2>/dev/null ||
+    { echo "fuzz_${targets[$i]}: ERROR: no result"; status=1; }
 done
 exit $status
