@@ -3,9 +3,8 @@
 
 #include "ext/colmap/table_relative.h"
 #include "ext/core/errors.h"
+#include "ext/core/rigid3.h"
 #include "ext/core/statistics.h"
-
-#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -116,10 +115,7 @@ RelativeEvaluation EvaluateRelativeOrientations(
     const Rigid3d true_pose =
         truth2->cam_from_world * truth1->cam_from_world.Inverse();
     pair.rotation_error_deg =
-        Eigen::AngleAxisd(
-            r.cam2_from_cam1.rotation.toRotationMatrix().transpose() *
-            true_pose.rotation.toRotationMatrix())
-            .angle() *
+        RotationAngleBetween(r.cam2_from_cam1.rotation, true_pose.rotation) *
         kDegPerRad;
     const Eigen::Vector3d a = r.cam2_from_cam1.Center().normalized();
     const Eigen::Vector3d b = true_pose.Center().normalized();
