@@ -30,8 +30,11 @@ class RelativeEvalTest : public ::testing::Test {
     PointsSceneOptions options;
     options.num_points = 10;
     truth_ = SynthesizePointsScene(options).scene;
+    // A folder per test: ctest runs the tests of this fixture side by side.
+    const std::string name =
+        ::testing::UnitTest::GetInstance()->current_test_info()->name();
     database_ = std::make_unique<Database>(
-        testing::TempDir("relative_eval") + "/database.db",
+        testing::TempDir("relative_eval_" + name) + "/database.db",
         Database::Mode::kCreate);
     const camera_t camera_id = database_->WriteCamera(
         Camera::Create(CameraModelId::kPinhole, 500, 640, 480));
