@@ -263,10 +263,11 @@ class Adjuster {
         const int g = GroupOf(block_->observations[o]);
         ++count[g];
         for (int k = 0; k < 2; ++k) {
-          // normalized = whitened / (sigma0 sqrt(r)).
-          const double whitened =
-              stats.normalized(k) * precision.sigma0 *
-              std::sqrt(std::max(stats.redundancy(k), 1e-12));
+          // normalized = whitened / (sigma0 sqrt(r)); a coordinate that is
+          // not testable has next to no residual and redundancy.
+          if (stats.redundancy(k) < kMinTestableRedundancy) continue;
+          const double whitened = stats.normalized(k) * precision.sigma0 *
+                                  std::sqrt(stats.redundancy(k));
           vpv[g] += whitened * whitened;
           r[g] += stats.redundancy(k);
           abs_w[g].push_back(std::abs(stats.normalized(k)));
@@ -331,6 +332,7 @@ class Adjuster {
     for (const ObservationStatistics& stats : precision.observations) {
       if (!stats.valid) continue;
       for (int k = 0; k < 2; ++k) {
+        if (stats.redundancy(k) < kMinTestableRedundancy) continue;
         standardised.push_back(std::abs(stats.normalized(k)));
       }
     }
@@ -495,14 +497,15 @@ class Adjuster {
   }
 
   // The solution moved into the datum of inner constraints over the tie
-  // points: the similarity that brings the adjusted tie points closest to
-  // their input coordinates (the linearised condition G^T dx = 0).
+  // points that fix it (InnerConstraintPoints): the similarity that brings
+  // them closest to their input coordinates (the linearised condition
+  // G^T dx = 0).
   void TransformToInnerConstraintDatum() {
+    const std::vector<bool> datum_points = InnerConstraintPoints(*block_);
     std::vector<Eigen::Vector3d> adjusted, reference;
     for (size_t p = 0; p < block_->points.size(); ++p) {
-      const BlockPoint& point = block_->points[p];
-      if (!point.active || point.kind != PointKind::kTie) continue;
-      adjusted.push_back(point.xyz);
+      if (!datum_points[p]) continue;
+      adjusted.push_back(block_->points[p].xyz);
       reference.push_back(initial_xyz_[p]);
     }
     const std::optional<Sim3d> transform = EstimateSim3d(adjusted, reference);

@@ -22,8 +22,9 @@
 // For a free network (AdjustmentBlock::free_network) the block holds seven
 // parameters during the solution;
 // the result is transformed into the datum of inner constraints over the
-// tie points (minimum trace of their covariance, centred on the input
-// coordinates) before the statistics are taken.
+// tie points whose rays fix them (InnerConstraintPoints: minimum trace of
+// their covariance, centred on their input coordinates) before the
+// statistics are taken.
 #pragma once
 
 #include "ext/adjustment/adjustment_block.h"

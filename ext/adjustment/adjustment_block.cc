@@ -7,6 +7,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 
@@ -62,6 +64,38 @@ int AdjustmentBlock::DeactivateWeakPoints() {
     }
   }
   return num_deactivated;
+}
+
+std::vector<double> AdjustmentBlock::IntersectionAnglesDeg() const {
+  std::vector<std::vector<Eigen::Vector3d>> rays(points.size());
+  for (const BlockObservation& observation : observations) {
+    if (!observation.active) continue;
+    const Eigen::Vector3d ray = points[observation.point_idx].xyz -
+                                images[observation.image_idx].center;
+    if (ray.norm() > 0) rays[observation.point_idx].push_back(ray.normalized());
+  }
+  std::vector<double> angles(points.size(), 0.0);
+  for (size_t p = 0; p < points.size(); ++p) {
+    double min_cosine = 1;
+    for (size_t a = 0; a < rays[p].size(); ++a) {
+      for (size_t b = a + 1; b < rays[p].size(); ++b) {
+        min_cosine = std::min(min_cosine, rays[p][a].dot(rays[p][b]));
+      }
+    }
+    angles[p] = std::acos(std::clamp(min_cosine, -1.0, 1.0)) * 180.0 / M_PI;
+  }
+  return angles;
+}
+
+std::vector<bool> InnerConstraintPoints(const AdjustmentBlock& block) {
+  const std::vector<double> angles = block.IntersectionAnglesDeg();
+  std::vector<bool> selected(block.points.size(), false);
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    selected[p] = point.active && point.kind == PointKind::kTie &&
+                  angles[p] >= kMinDatumIntersectionAngleDeg;
+  }
+  return selected;
 }
 
 namespace {

@@ -127,7 +127,21 @@ struct AdjustmentBlock {
   // Deactivates tie points with fewer than two active observations (and
   // their observations); returns how many were deactivated.
   int DeactivateWeakPoints();
+  // Per point: the largest angle between two of its active rays, degrees
+  // (0 for points with fewer than two).
+  std::vector<double> IntersectionAnglesDeg() const;
 };
+
+// The tie points whose coordinates define a free network's datum (inner
+// constraints, adjustment.h and precision.h): the active tie points whose
+// rays intersect at kMinDatumIntersectionAngleDeg or more. A point seen from
+// nearly one direction can slide along it (its standard deviation in depth
+// is the lateral one over the sine of the angle); among the datum points its
+// variance would enter the centroid and, through it, every covariance of the
+// network. The limit is COLMAP's default for keeping a triangulated point
+// (Mapper.filter_min_tri_angle).
+constexpr double kMinDatumIntersectionAngleDeg = 1.5;
+std::vector<bool> InnerConstraintPoints(const AdjustmentBlock& block);
 
 // ---------------------------------------------------------------------------
 // Residual terms: the cost functions of the block and the parameter blocks

@@ -447,11 +447,12 @@ class PrecisionComputer {
 
   bool IsDatumPoint(const ParamBlock& param) const {
     return param.kind == BlockKind::kPoint && param.eliminated &&
-           block_->points[param.owner].kind == PointKind::kTie;
+           datum_points_[param.owner];
   }
 
   // See the header: Q_E = S Q S^T restricted to the diagonal blocks needed.
   void ComputeInnerConstraintTransform() {
+    datum_points_ = InnerConstraintPoints(*block_);
     origin_.setZero();
     int count = 0;
     for (const PointSystem& point : points_) {
@@ -460,7 +461,15 @@ class PrecisionComputer {
       origin_ += block_->points[param.owner].xyz;
       ++count;
     }
-    if (count < 3) throw RunFailure("a free network needs tie points");
+    if (count < 3) {
+      throw RunFailure(
+          StrCat("a free network needs three or more tie points whose rays "
+                 "intersect at ",
+                 kMinDatumIntersectionAngleDeg,
+                 " deg or more; there are ",
+                 count));
+    }
+    result_.num_datum_points = count;
     origin_ /= count;
     Eigen::Matrix<double, 7, 7> A = Eigen::Matrix<double, 7, 7>::Zero();
     for (const PointSystem& point : points_) {
@@ -721,9 +730,9 @@ class PrecisionComputer {
             jacobian.residual;
         stats.redundancy = redundancy;
         for (int k = 0; k < 2; ++k) {
-          const double denominator =
-              result_.sigma0 * std::sqrt(std::max(redundancy(k), 1e-12));
-          stats.normalized(k) = jacobian.residual(k) / denominator;
+          if (redundancy(k) < kMinTestableRedundancy) continue;
+          stats.normalized(k) = jacobian.residual(k) /
+                                (result_.sigma0 * std::sqrt(redundancy(k)));
         }
       } else if (term.type == TermType::kPointPrior) {
         const BlockPoint& point = block_->points[term.index];
@@ -754,6 +763,7 @@ class PrecisionComputer {
   Eigen::MatrixXd Q_kk_;
   // Inner constraints.
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
+  std::vector<bool> datum_points_;  // InnerConstraintPoints of the block
   std::vector<Eigen::Matrix<double, 7, 3>> H_;
   Eigen::MatrixXd HQ_kept_;
   std::vector<Eigen::Matrix<double, 7, 3>> HQ_point_;

@@ -25,7 +25,11 @@
 // constraints over the tie points (Meissl; the S-transformation of Baarda
 // 1973): Q_E = S Q S^T, S = I - G (G^T W G)^-1 G^T W, where the columns of
 // G span the seven similarity motions and W selects the tie points. The
-// residuals and their cofactors do not depend on the datum.
+// residuals and their cofactors do not depend on the datum. W selects the
+// tie points that the rays fix (InnerConstraintPoints, adjustment_block.h):
+// the covariances are relative to the centroid of those points, and they
+// are the precision that an alignment to any reference over those points
+// leaves.
 #pragma once
 
 #include "ext/adjustment/adjustment_block.h"
@@ -45,12 +49,20 @@ struct PrecisionOptions {
   bool inner_constraints = false;
 };
 
+// An image coordinate with less redundancy than this is not controlled by
+// the others: a blunder shows in its residual at less than a hundredth of
+// its size, and its normalised residual would be the solver's last
+// thousandth of a pixel over a vanishing root (a point seen twice has all
+// its redundancy across the epipolar line). It is not tested: its w is 0.
+constexpr double kMinTestableRedundancy = 0.01;
+
 struct ObservationStatistics {
   bool valid = false;
   Eigen::Vector2d residual_px =
       Eigen::Vector2d::Zero();                           // projected - observed
   Eigen::Vector2d redundancy = Eigen::Vector2d::Zero();  // r_i
-  Eigen::Vector2d normalized = Eigen::Vector2d::Zero();  // w_i
+  Eigen::Vector2d normalized =
+      Eigen::Vector2d::Zero();  // w_i (0 where not testable)
 };
 
 struct AdjustmentPrecision {
@@ -59,9 +71,11 @@ struct AdjustmentPrecision {
   int num_image_coordinates = 0;
   int num_unknowns = 0;  // u
   int datum_defect = 0;  // d
-  int redundancy = 0;    // r = n - u + d
-  double vtpv = 0;       // in reference pixels squared
-  double sigma0 = 0;     // a posteriori, in reference pixels
+  // Free network: the tie points of the inner constraints (W above).
+  int num_datum_points = 0;
+  int redundancy = 0;  // r = n - u + d
+  double vtpv = 0;     // in reference pixels squared
+  double sigma0 = 0;   // a posteriori, in reference pixels
   // Covariances (sigma0^2 Q) per block entry; zero for inactive entries and
   // fixed parameters. Points in metres^2; images as (rotation about the
   // camera axes [rad], centre [m]); cameras over all model parameters.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/adjustment/precision.h"
 
+#include "ext/adjustment/adjustment.h"
 #include "ext/adjustment/bundle_solver.h"
 #include "ext/adjustment/cost_functions.h"
 #include "ext/synth/points_scene.h"
@@ -90,6 +91,39 @@ Eigen::MatrixXd DenseJacobian(AdjustmentBlock* block,
     row += m;
   }
   return J;
+}
+
+// Moves a copy of the first point of image 0 100 times farther along its
+// ray and observes it, exactly, in images 0 and 1 (60 degrees apart on the
+// ring): its rays meet at about half a degree. Returns its index; `copied`
+// is the point it was made from.
+int AddDistantPoint(double sigma_px, AdjustmentBlock* block, int* copied) {
+  int a = -1;
+  for (const BlockObservation& o : block->observations) {
+    if (o.image_idx == 0) {
+      a = o.point_idx;
+      break;
+    }
+  }
+  *copied = a;
+  if (a < 0) return -1;
+  BlockPoint far = block->points[a];
+  far.point3D_id = 1000000;
+  const Eigen::Vector3d c0 = block->images[0].center;
+  far.xyz = c0 + 100 * (far.xyz - c0);
+  block->points.push_back(far);
+  const int far_idx = static_cast<int>(block->points.size()) - 1;
+  for (int i : {0, 1}) {
+    const BlockImage& image = block->images[i];
+    BlockObservation o;
+    o.image_idx = i;
+    o.point_idx = far_idx;
+    o.sigma_px = sigma_px;
+    o.xy = block->cameras[image.camera_idx].camera.ImgFromCam(
+        image.CamFromWorld() * far.xyz, &image.frame);
+    block->observations.push_back(o);
+  }
+  return far_idx;
 }
 
 TEST(Precision, MatchesTheDenseInverseWithControl) {
@@ -224,6 +258,98 @@ TEST(Precision, FreeNetworkGivesTheInnerConstraintCovariance) {
     trace_fixed += fixed.point_covariance[p].trace();
   }
   EXPECT_LT(trace_inner, trace_fixed);
+}
+
+// A tie point whose two rays meet at a fraction of a degree slides along
+// them; over all tie points, its variance would enter the centroid of the
+// inner constraints and every covariance of the network with it.
+TEST(Precision, FreeNetworkDatumLeavesOutPointsSeenFromOneDirection) {
+  AdjustmentBlock block = SmallBlock(0.5, 5);
+  // The camera as given: with the principal point free and no rolled
+  // stations, any ray that fixes a relative rotation would also sharpen it.
+  std::fill(block.cameras[0].free.begin(), block.cameras[0].free.end(), false);
+  block.images[0].rotation_fixed = true;
+  block.images[0].center_fixed = {true, true, true};
+  block.images[3].center_fixed = {true, false, false};
+  BundleSolverOptions solver_options;
+  solver_options.num_threads = 1;
+  ASSERT_TRUE(SolveBundle(solver_options, &block).usable);
+  PrecisionOptions options;
+  options.inner_constraints = true;
+  const AdjustmentPrecision before = ComputePrecision(&block, options);
+
+  // A point of image 0 moved 100 times farther along its ray, and seen once
+  // more from the next station, 60 degrees round the ring. Its observations
+  // are weak (50 px), so that it adds next to nothing to the orientations
+  // (a point that far off fixes the relative rotation of the two images).
+  int a = -1;
+  const int far_idx = AddDistantPoint(50, &block, &a);
+  ASSERT_GE(a, 0);
+  ASSERT_TRUE(SolveBundle(solver_options, &block).usable);
+  EXPECT_LT(block.IntersectionAnglesDeg()[far_idx],
+            kMinDatumIntersectionAngleDeg);
+  EXPECT_FALSE(InnerConstraintPoints(block)[far_idx]);
+  const AdjustmentPrecision after = ComputePrecision(&block, options);
+  EXPECT_EQ(after.num_datum_points, before.num_datum_points);
+  // Its own depth is that poor ...
+  EXPECT_GT(after.point_covariance[far_idx].trace(),
+            1e4 * after.point_covariance[a].trace());
+  // ... and the others' precision keeps its figures.
+  for (int i = 0; i < static_cast<int>(block.images.size()); ++i) {
+    const double s_before =
+        before.image_covariance[i].bottomRightCorner<3, 3>().trace();
+    const double s_after =
+        after.image_covariance[i].bottomRightCorner<3, 3>().trace();
+    EXPECT_NEAR(std::sqrt(s_after / s_before), 1.0, 0.05) << "image " << i;
+  }
+  for (int p : {1, 17, 33}) {
+    EXPECT_NEAR(std::sqrt(after.point_covariance[p].trace() /
+                          before.point_covariance[p].trace()),
+                1.0,
+                0.05)
+        << "point " << p;
+  }
+}
+
+// A point seen twice has all its redundancy across the epipolar line: the
+// coordinate along it is not controlled, and its normalised residual would
+// be the solver's last digits over a vanishing root. Data snooping must
+// leave such a point alone (it took both observations of every one).
+TEST(Precision, ACoordinateWithoutRedundancyIsNotTested) {
+  PointsSceneOptions scene_options;
+  scene_options.num_points = 300;
+  scene_options.alternate_roll_deg = 90;
+  scene_options.num_distant_points = 8;
+  scene_options.keypoint_noise_px = 0.3;
+  const SyntheticTruth truth = SynthesizePointsScene(scene_options);
+  AdjustmentBlock block = BlockFromScene(truth.noisy_scene, 0.3);
+  block.images[0].rotation_fixed = true;
+  block.images[0].center_fixed = {true, true, true};
+  block.images[4].center_fixed = {true, false, false};
+  AdjustmentOptions options;
+  options.self_calibration = SelfCalibration::kNone;
+  options.solver.num_threads = 1;
+  const AdjustmentResult result = RunAdjustment(options, &block);
+  const std::vector<double> angles = block.IntersectionAnglesDeg();
+  int num_distant = 0, num_untested = 0;
+  for (size_t o = 0; o < block.observations.size(); ++o) {
+    const BlockObservation& observation = block.observations[o];
+    if (angles[observation.point_idx] >= kMinDatumIntersectionAngleDeg) {
+      continue;
+    }
+    ++num_distant;
+    EXPECT_TRUE(observation.active) << "observation " << o;
+    const ObservationStatistics& stats = result.precision.observations[o];
+    for (int k = 0; k < 2; ++k) {
+      if (stats.redundancy(k) < kMinTestableRedundancy) {
+        EXPECT_EQ(stats.normalized(k), 0.0);
+        ++num_untested;
+      }
+    }
+  }
+  EXPECT_EQ(num_distant, 2 * scene_options.num_distant_points);
+  // One coordinate of each carries its point's redundancy.
+  EXPECT_EQ(num_untested, num_distant);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 namespace bayon {
 
@@ -21,12 +22,58 @@ void PointsSceneOptions::Check() const {
   CheckOption(object_radius_m > 0, "object_radius_m", "> 0", object_radius_m);
   CheckOption(
       keypoint_noise_px >= 0, "keypoint_noise_px", ">= 0", keypoint_noise_px);
+  CheckOption(num_distant_points >= 0,
+              "num_distant_points",
+              ">= 0",
+              num_distant_points);
+  CheckOption(distant_points_m > ring_radius_m,
+              "distant_points_m",
+              "> ring_radius_m",
+              distant_points_m);
   CheckOption(max_view_angle_deg > 0 && max_view_angle_deg <= 90,
               "max_view_angle_deg",
               "in (0, 90]",
               max_view_angle_deg);
   camera.Check();
 }
+
+namespace {
+
+// Each point on the bisector of two neighbouring stations' axes, at
+// distant_points_m from their midpoint.
+void AddDistantPoints(const PointsSceneOptions& options, Scene* scene) {
+  std::vector<image_t> ids;
+  for (const auto& [image_id, image] : scene->images) ids.push_back(image_id);
+  for (int k = 0; k < options.num_distant_points; ++k) {
+    const image_t id1 = ids[k % ids.size()];
+    const image_t id2 = ids[(k + 1) % ids.size()];
+    const Rigid3d& pose1 = scene->images.at(id1).cam_from_world;
+    const Rigid3d& pose2 = scene->images.at(id2).cam_from_world;
+    const Eigen::Vector3d axis =
+        (pose1.rotation.inverse() * Eigen::Vector3d::UnitZ() +
+         pose2.rotation.inverse() * Eigen::Vector3d::UnitZ())
+            .normalized();
+    const Eigen::Vector3d xyz = 0.5 * (pose1.Center() + pose2.Center()) +
+                                options.distant_points_m * axis;
+    std::vector<TrackElement> track;
+    for (image_t id : {id1, id2}) {
+      Image& image = scene->images.at(id);
+      Point2D point;
+      if (!scene->Project(image, xyz, &point.xy)) continue;
+      image.points2D.push_back(point);
+      track.push_back({id, static_cast<point2D_t>(image.points2D.size() - 1)});
+    }
+    if (track.size() == 2) {
+      scene->AddPoint3D(xyz, track);
+    } else {
+      for (const TrackElement& element : track) {
+        scene->images.at(element.image_id).points2D.pop_back();
+      }
+    }
+  }
+}
+
+}  // namespace
 
 SyntheticTruth SynthesizePointsScene(const PointsSceneOptions& options) {
   options.Check();
@@ -91,6 +138,7 @@ SyntheticTruth SynthesizePointsScene(const PointsSceneOptions& options) {
     Point3D& point = scene.points3D.at(point3D_id);
     point.color = Eigen::Matrix<uint8_t, 3, 1>(200, 180, 150);
   }
+  AddDistantPoints(options, &scene);
   scene.UpdateReprojectionErrors();
 
   truth.noisy_scene = scene;
@@ -112,6 +160,10 @@ SyntheticTruth SynthesizePointsScene(const PointsSceneOptions& options) {
   description["object_radius_m"] = options.object_radius_m;
   description["object_height_m"] = options.object_height_m;
   description["max_view_angle_deg"] = options.max_view_angle_deg;
+  if (options.num_distant_points > 0) {
+    description["num_distant_points"] = options.num_distant_points;
+    description["distant_points_m"] = options.distant_points_m;
+  }
   description["keypoint_noise_px"] = options.keypoint_noise_px;
   description["seed"] = options.seed;
   description["focal_length_mm"] = options.camera.focal_length_mm;

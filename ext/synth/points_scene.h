@@ -24,6 +24,11 @@ struct PointsSceneOptions {
   // A point is seen by cameras within this angle of its outward normal, so
   // tracks are a few images long as on a real object.
   double max_view_angle_deg = 60.0;
+  // Points far behind the object, each seen by two neighbouring stations
+  // only (as the background, or data snooping, leaves them in a real block):
+  // their rays meet at a fraction of a degree. Added after the others.
+  int num_distant_points = 0;
+  double distant_points_m = 300.0;
   // Gaussian noise added to the observations that go into the database.
   double keypoint_noise_px = 0.3;
   unsigned int seed = 1;
