@@ -135,6 +135,11 @@ class ReportBuilder {
     Json json;
     json["type"] = DatumTypeName(datum.type);
     json["description"] = datum.description;
+    json["precision"] = PrecisionMeaning();
+    if (datum.type == DatumType::kFree) {
+      json["num_datum_points"] = precision_.num_datum_points;
+      json["min_datum_intersection_angle_deg"] = kMinDatumIntersectionAngleDeg;
+    }
     const Sim3d& sim = datum.object_from_model;
     json["object_from_model"] = {{"scale", sim.scale},
                                  {"qvec",
@@ -154,6 +159,35 @@ class ReportBuilder {
       json["similarity_residuals"] = residuals;
     }
     return json;
+  }
+
+  // What the standard deviations of this datum mean.
+  std::string PrecisionMeaning() const {
+    switch (input_.datum.type) {
+      case DatumType::kFree:
+        return StrCat(
+            "relative to the centroid of the ",
+            precision_.num_datum_points,
+            " tie points whose rays intersect at ",
+            kMinDatumIntersectionAngleDeg,
+            " deg or more (inner constraints): the precision of the "
+            "network's shape, without its position, orientation and scale; "
+            "it is what remains after aligning the model to any reference by "
+            "a similarity over those points");
+      case DatumType::kMinimum:
+        return "in the object frame of the minimum datum: relative to the "
+               "levelling bar's lower end (held), with the bar's length as "
+               "the scale and its direction as the vertical, and the held "
+               "coordinate of the datum point; they grow with the distance "
+               "from the bar";
+      case DatumType::kControl:
+      case DatumType::kAuto:
+        break;
+    }
+    return "in the control points' frame: they include the given standard "
+           "deviations of weighted control points and take held control "
+           "coordinates as exact; check points are compared with their "
+           "given coordinates";
   }
 
   Json CamerasJson() const {
@@ -261,13 +295,21 @@ class ReportBuilder {
       json["redundancy_number_min"] = min_redundancy;
     }
     // Theoretical precision of the tie points and of the exterior
-    // orientations: RMS of the standard deviations.
+    // orientations: RMS of the standard deviations. The tie points whose
+    // rays meet at less than kMinDatumIntersectionAngleDeg are counted apart:
+    // each is free to slide along its rays, and a handful of them would
+    // make the RMS of all (each keeps its own figure in "points").
     Eigen::Vector3d point_sq = Eigen::Vector3d::Zero(),
                     point_max = Eigen::Vector3d::Zero();
-    int num_points = 0;
+    int num_points = 0, num_weak = 0;
+    const std::vector<double> angles = block_.IntersectionAnglesDeg();
     for (size_t i = 0; i < block_.points.size(); ++i) {
       const BlockPoint& point = block_.points[i];
       if (!point.active || point.kind != PointKind::kTie) continue;
+      if (angles[i] < kMinDatumIntersectionAngleDeg) {
+        ++num_weak;
+        continue;
+      }
       const Eigen::Vector3d s = StdDevs(p.point_covariance[i]);
       point_sq += s.cwiseAbs2();
       point_max = point_max.cwiseMax(s);
@@ -278,6 +320,8 @@ class ReportBuilder {
           Vec(kMm * (point_sq / num_points).cwiseSqrt());
       json["point_precision_max_mm"] = Vec(kMm * point_max);
     }
+    json["num_weak_tie_points"] = num_weak;
+    json["min_intersection_angle_deg"] = kMinDatumIntersectionAngleDeg;
     Eigen::Vector3d center_sq = Eigen::Vector3d::Zero(),
                     rotation_sq = Eigen::Vector3d::Zero();
     for (size_t i = 0; i < block_.images.size(); ++i) {
@@ -555,6 +599,11 @@ std::string Printout(const Json& r) {
                     res["inlier"].get<bool>() ? "" : "   SUSPECT");
     }
   }
+  if (r["datum"].contains("precision")) {
+    out += Printf(" %-18s %s\n",
+                  "standard dev.",
+                  r["datum"]["precision"].get<std::string>().c_str());
+  }
   if (r["datum"]["type"] == "free") {
     out +=
         " note: a free network keeps the input model's units; figures in "
@@ -635,7 +684,11 @@ std::string Printout(const Json& r) {
                   s["redundancy_number_min"].get<double>());
   }
   if (s.contains("point_precision_rms_mm")) {
-    out += "   theoretical precision of the tie points (RMS):\n";
+    out += Printf(
+        "   theoretical precision of the tie points (RMS; without the %d "
+        "whose rays meet at less than %.1f deg):\n",
+        s["num_weak_tie_points"].get<int>(),
+        s["min_intersection_angle_deg"].get<double>());
     out += "     " +
            Triple(s["point_precision_rms_mm"],
                   "sx = %.2f mm   sy = %.2f mm   sz = %.2f mm") +

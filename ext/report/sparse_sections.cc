@@ -1000,6 +1000,11 @@ Section PrecisionSection(const Workspace& ws, Page* page) {
   section.html += Paragraph("Datum: <b>" + HtmlEscape(String(datum, "type")) +
                             "</b> &ndash; " +
                             HtmlEscape(String(datum, "description")) + ".");
+  const std::string meaning = String(datum, "precision");
+  if (!meaning.empty()) {
+    section.html +=
+        Paragraph("Standard deviations: " + HtmlEscape(meaning) + ".");
+  }
 
   HtmlTable table(
       {"Quantity", "Symbol", "This workspace", "Bayon tower (paper, SGAP)"},
@@ -1051,6 +1056,15 @@ Section PrecisionSection(const Workspace& ws, Page* page) {
            FormatFixed(PaperPrecision::kSy, 1) + " / " +
            FormatFixed(PaperPrecision::kSz, 1) + " mm"},
       "key");
+  if (Child(s, "num_weak_tie_points").is_number()) {
+    table.AddRow(
+        {"&hellip; not counted: tie points whose rays meet at less "
+         "than " +
+             FormatFixed(Number(s, "min_intersection_angle_deg"), 1) + "&deg;",
+         "",
+         CountOf(s, "num_weak_tie_points"),
+         "&ndash;"});
+  }
   table.AddRow(
       {"&hellip; largest",
        "",
