@@ -114,8 +114,7 @@ SyntheticControl MakeControl(const SyntheticTruth& truth,
   options.num_check_points = 8;
   options.levelling_bar = true;
   options.measurement_noise_px = 0;
-  SyntheticControl control =
-      SynthesizeControl(truth, scene_options, options);
+  SyntheticControl control = SynthesizeControl(truth, scene_options, options);
   for (ImageMeasurement& m : control.measurements) m.sigma_px = kNoisePx;
   return control;
 }
@@ -153,7 +152,8 @@ void RunScenario(const Setup& setup,
     }
     // Approximations off the truth, as a strip would give them.
     std::normal_distribution<double> unit(0, 1);
-    for (BlockPoint& p : block.points) p.xyz += 0.01 * RandomVector<3>(unit, rng);
+    for (BlockPoint& p : block.points)
+      p.xyz += 0.01 * RandomVector<3>(unit, rng);
     for (BlockImage& i : block.images) {
       i.center += 0.02 * RandomVector<3>(unit, rng);
     }
@@ -206,9 +206,9 @@ void RunScenario(const Setup& setup,
                   precision.image_covariance[i].bottomRightCorner<3, 3>());
     }
   }
-  const double seconds = std::chrono::duration<double>(
-                             std::chrono::steady_clock::now() - start)
-                             .count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+          .count();
   auto row = [&](const char* what, const Figures& f) {
     std::printf(
         "%-8s %-8s %6d %9.2f %9.2f %9.2f   %4.2f %4.2f %4.2f   %6.2f "
@@ -228,17 +228,16 @@ void RunScenario(const Setup& setup,
   row("points", Summarise(points, setup.num_draws));
   row("distant", Summarise(weak_points, setup.num_draws));
   row("centres", Summarise(centers, setup.num_draws));
-  std::printf("%-8s sigma0 %.3f px (noise %.2f px)%s, %.1f s for %d draws\n",
-              scenario.name,
-              sigma0_sum / setup.num_draws,
-              kNoisePx,
-              scenario.datum == DatumType::kFree
-                  ? (", " + std::to_string(num_datum_points) +
-                     " datum points")
-                        .c_str()
-                  : "",
-              seconds,
-              setup.num_draws);
+  std::printf(
+      "%-8s sigma0 %.3f px (noise %.2f px)%s, %.1f s for %d draws\n",
+      scenario.name,
+      sigma0_sum / setup.num_draws,
+      kNoisePx,
+      scenario.datum == DatumType::kFree
+          ? (", " + std::to_string(num_datum_points) + " datum points").c_str()
+          : "",
+      seconds,
+      setup.num_draws);
 }
 
 int Main(int argc, char** argv) {
@@ -277,17 +276,16 @@ int Main(int argc, char** argv) {
       kNoisePx,
       scene_options.num_distant_points,
       scene_options.distant_points_m);
-  std::printf(
-      "%-8s %-8s %6s %9s %9s %9s   %-14s   %6s %10s\n",
-      "datum",
-      "what",
-      "coords",
-      "sX [mm]",
-      "sY [mm]",
-      "sZ [mm]",
-      "ratio X Y Z",
-      "median",
-      "0.8-1.25");
+  std::printf("%-8s %-8s %6s %9s %9s %9s   %-14s   %6s %10s\n",
+              "datum",
+              "what",
+              "coords",
+              "sX [mm]",
+              "sY [mm]",
+              "sZ [mm]",
+              "ratio X Y Z",
+              "median",
+              "0.8-1.25");
   for (const Scenario& scenario : {Scenario{"control", DatumType::kControl},
                                    Scenario{"minimum", DatumType::kMinimum},
                                    Scenario{"free", DatumType::kFree}}) {

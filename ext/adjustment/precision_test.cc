@@ -179,15 +179,20 @@ TEST(Precision, MatchesTheDenseInverseWithControl) {
               1e-6 * std::sqrt(camera(3, 3) * camera(1, 1)));
 }
 
-TEST(Precision, FreeNetworkGivesTheInnerConstraintCovariance) {
-  AdjustmentBlock block = SmallBlock(0.5, 5);
-  // Minimal datum: image 0 held, one centre coordinate of image 3 held.
-  block.images[0].rotation_fixed = true;
-  block.images[0].center_fixed = {true, true, true};
-  block.images[3].center_fixed = {true, false, false};
+// A free network's minimal datum: image 0 held, one centre coordinate of
+// image 3 held. Returns whether the block was solved.
+bool SolveInMinimalDatum(AdjustmentBlock* block) {
+  block->images[0].rotation_fixed = true;
+  block->images[0].center_fixed = {true, true, true};
+  block->images[3].center_fixed = {true, false, false};
   BundleSolverOptions solver_options;
   solver_options.num_threads = 1;
-  ASSERT_TRUE(SolveBundle(solver_options, &block).usable);
+  return SolveBundle(solver_options, block).usable;
+}
+
+TEST(Precision, FreeNetworkGivesTheInnerConstraintCovariance) {
+  AdjustmentBlock block = SmallBlock(0.5, 5);
+  ASSERT_TRUE(SolveInMinimalDatum(&block));
   PrecisionOptions options;
   options.inner_constraints = true;
   const AdjustmentPrecision precision = ComputePrecision(&block, options);
@@ -268,12 +273,7 @@ TEST(Precision, FreeNetworkDatumLeavesOutPointsSeenFromOneDirection) {
   // The camera as given: with the principal point free and no rolled
   // stations, any ray that fixes a relative rotation would also sharpen it.
   std::fill(block.cameras[0].free.begin(), block.cameras[0].free.end(), false);
-  block.images[0].rotation_fixed = true;
-  block.images[0].center_fixed = {true, true, true};
-  block.images[3].center_fixed = {true, false, false};
-  BundleSolverOptions solver_options;
-  solver_options.num_threads = 1;
-  ASSERT_TRUE(SolveBundle(solver_options, &block).usable);
+  ASSERT_TRUE(SolveInMinimalDatum(&block));
   PrecisionOptions options;
   options.inner_constraints = true;
   const AdjustmentPrecision before = ComputePrecision(&block, options);
@@ -285,7 +285,7 @@ TEST(Precision, FreeNetworkDatumLeavesOutPointsSeenFromOneDirection) {
   int a = -1;
   const int far_idx = AddDistantPoint(50, &block, &a);
   ASSERT_GE(a, 0);
-  ASSERT_TRUE(SolveBundle(solver_options, &block).usable);
+  ASSERT_TRUE(SolveInMinimalDatum(&block));
   EXPECT_LT(block.IntersectionAnglesDeg()[far_idx],
             kMinDatumIntersectionAngleDeg);
   EXPECT_FALSE(InnerConstraintPoints(block)[far_idx]);
