@@ -265,7 +265,7 @@ class Adjuster {
         for (int k = 0; k < 2; ++k) {
           // normalized = whitened / (sigma0 sqrt(r)); a coordinate that is
           // not testable has next to no residual and redundancy.
-          if (stats.redundancy(k) < kMinTestableRedundancy) continue;
+          if (!stats.Testable(k)) continue;
           const double whitened = stats.normalized(k) * precision.sigma0 *
                                   std::sqrt(stats.redundancy(k));
           vpv[g] += whitened * whitened;
@@ -332,7 +332,7 @@ class Adjuster {
     for (const ObservationStatistics& stats : precision.observations) {
       if (!stats.valid) continue;
       for (int k = 0; k < 2; ++k) {
-        if (stats.redundancy(k) < kMinTestableRedundancy) continue;
+        if (!stats.Testable(k)) continue;
         standardised.push_back(std::abs(stats.normalized(k)));
       }
     }

@@ -730,7 +730,7 @@ class PrecisionComputer {
             jacobian.residual;
         stats.redundancy = redundancy;
         for (int k = 0; k < 2; ++k) {
-          if (redundancy(k) < kMinTestableRedundancy) continue;
+          if (!stats.Testable(k)) continue;
           stats.normalized(k) = jacobian.residual(k) /
                                 (result_.sigma0 * std::sqrt(redundancy(k)));
         }

@@ -63,6 +63,8 @@ struct ObservationStatistics {
   Eigen::Vector2d redundancy = Eigen::Vector2d::Zero();  // r_i
   Eigen::Vector2d normalized =
       Eigen::Vector2d::Zero();  // w_i (0 where not testable)
+  // Whether coordinate k has the redundancy to be tested.
+  bool Testable(int k) const { return redundancy(k) >= kMinTestableRedundancy; }
 };
 
 struct AdjustmentPrecision {
