@@ -65,6 +65,8 @@ std::string CopyOfTower(const std::string& name) {
 
 std::vector<std::string> DenseArgs(const std::string& ws) {
   return {"dense",
+          "--mode",
+          "paper",
           "--workspace_path",
           ws,
           "--input_path",

@@ -29,7 +29,14 @@ nlohmann::ordered_json ReportToJson(const DenseReport& report,
   json["seconds"] = report.seconds;
   json["cells_per_second"] = report.CellsPerSecond();
   json["points_per_second"] = report.PointsPerSecond();
-  json["cell_size"] = options.cell_size;
+  json["mode"] = options.mode == DenseMode::kPaper ? "paper" : "multiview";
+  if (options.mode == DenseMode::kPaper) {
+    json["cell_size"] = options.cell_size;
+  } else {
+    json["propagation_seconds"] = report.propagation_seconds;
+    json["fusion_seconds"] = report.fusion_seconds;
+    json["mpgc_seconds"] = report.mpgc_seconds;
+  }
   json["masters"] = nlohmann::ordered_json::array();
   for (const DenseMasterReport& master : report.masters) {
     nlohmann::ordered_json entry;
@@ -60,14 +67,17 @@ int RunDense(int argc, char** argv) {
   std::string output_path, fused_path, report_path, log_path;
   bool overwrite = false;
   DenseOptions options;
+  std::string mode = "multiview";
   CommandLine command(
       "dense",
       "Dense surface points by multi-photo geometrically constrained "
-      "matching (MPGC, the Bayon paper's sec. 3.3) on the CPU: a dense "
-      "Moravec pattern in a few master images, approximations by "
-      "correlation along the master rays, then least-squares matching of "
-      "each master patch against all its search images at once, constrained "
-      "to the collinearity rays, giving X, Y, Z with their standard "
+      "matching (MPGC, the Bayon paper's sec. 3.3) on the CPU. multiview "
+      "(default): every photograph a master, a depth and a normal for every "
+      "pixel by propagating plane hypotheses (PatchMatch), the depth maps "
+      "fused where they agree, then MPGC of every fused point against the "
+      "views that confirmed it. paper: the paper's sampling, a Moravec "
+      "point per cell of a few masters, approximations by correlation along "
+      "the master rays, then MPGC. Both give X, Y, Z with their standard "
       "deviations. Writes a PLY (normals, colours, sx sy sz, num_images, "
       "master_id) and COLMAP's fused.ply + fused.ply.vis beside it.");
   CLI::App& app = command.app();
@@ -81,11 +91,58 @@ int RunDense(int argc, char** argv) {
   app.add_option("--report_path",
                  report_path,
                  "Report as JSON (default: --output_path with .json)");
+  app.add_option("--mode", mode, "multiview (depth maps) or paper")
+      ->transform(CLI::IsMember({"multiview", "paper"}));
+  app.add_option("--max_image_size",
+                 options.max_image_size,
+                 "multiview: depth maps of the photographs shrunk by a whole "
+                 "factor to this longer side at most, px");
+  app.add_option("--num_source_views",
+                 options.num_source_views,
+                 "multiview: source views per master (most shared sparse "
+                 "points)");
+  app.add_option("--min_triangulation_angle_deg",
+                 options.min_triangulation_angle_deg,
+                 "multiview: a source shares points at this angle at least");
+  app.add_option("--patch_match_window_radius",
+                 options.patch_match.window_radius,
+                 "multiview: correlation window radius, depth-map px");
+  app.add_option("--patch_match_window_step",
+                 options.patch_match.window_step,
+                 "multiview: every n-th pixel of the window");
+  app.add_option("--patch_match_iterations",
+                 options.patch_match.num_iterations,
+                 "multiview: red-black propagation iterations");
+  app.add_option("--patch_match_best_views",
+                 options.patch_match.best_views,
+                 "multiview: a plane's cost over its best n views");
+  app.add_option("--min_consistent_views",
+                 options.fusion.min_consistent_views,
+                 "multiview: other depth maps that must agree with a pixel");
+  app.add_option("--max_depth_error",
+                 options.fusion.max_depth_error,
+                 "multiview: agreement in depth, share of the depth");
+  app.add_option("--max_normal_error_deg",
+                 options.fusion.max_normal_error_deg,
+                 "multiview: agreement in normal, degrees");
+  app.add_option("--max_cost",
+                 options.fusion.max_cost,
+                 "multiview: largest matching cost (1 - NCC) fused");
+  app.add_option("--refine",
+                 options.refine,
+                 "multiview: MPGC for every fused point (0: the fused points, "
+                 "without covariance)");
+  app.add_option("--max_refine_shift_gsd",
+                 options.max_refine_shift_gsd,
+                 "multiview: reject points MPGC moves further, depth-map "
+                 "GSDs");
   app.add_option("--highpass_sigma_px",
                  options.highpass_sigma_px,
                  "Matching on grey values minus their Gaussian blur of this "
                  "sigma, px (0 = off): different light between photographs");
-  app.add_option("--num_masters", options.num_masters, "Master images");
+  app.add_option("--num_masters",
+                 options.num_masters,
+                 "Master images (0: every one, multiview; 5, paper)");
   app.add_option("--master_names",
                  options.master_names,
                  "Master images by name, comma-separated (overrides "
@@ -199,6 +256,7 @@ int RunDense(int argc, char** argv) {
         "give --workspace_path, or --image_path, --input_path and "
         "--output_path");
   }
+  options.mode = mode == "paper" ? DenseMode::kPaper : DenseMode::kMultiView;
   options.Check();
   in.Check();
   const fs::path output_folder = fs::absolute(output_path).parent_path();
@@ -216,27 +274,36 @@ int RunDense(int argc, char** argv) {
   command.StartLog(log_path);
 
   const Scene scene = ReadOrientedModel(in.input_path, in.database_path);
-  const std::vector<MasterSelection> masters = SelectMasters(scene, options);
+  const bool paper = options.mode == DenseMode::kPaper;
+  const std::vector<MasterSelection> masters =
+      paper ? SelectMasters(scene, options)
+            : SelectMultiViewMasters(scene, options);
   for (const MasterSelection& selection : masters) {
     std::string search;
     for (image_t id : selection.search) {
       search += (search.empty() ? "" : ", ") + scene.images.at(id).name;
     }
     LOG(INFO) << "master " << scene.images.at(selection.master).name
-              << ", search images " << search;
+              << (paper ? ", search images " : ", source views ") << search;
   }
   // A photograph that cannot be read costs its own part only: the masters
-  // match without it (DenseReconstruct), and the summary says so.
+  // match without it, and the summary says so.
   std::map<image_t, std::string> unreadable;
-  const std::map<image_t, DenseImage> images = LoadDenseImages(
-      scene, masters, in.image_path, options.highpass_sigma_px, &unreadable);
-  for (const auto& [id, error] : unreadable) {
-    LOG(WARNING) << "left out: " << error;
-  }
+  std::map<image_t, DenseImage> images;
   DenseReport report;
   std::vector<std::vector<image_t>> seen;
-  const PointCloud cloud =
-      DenseReconstruct(scene, images, masters, options, &report, &seen);
+  PointCloud cloud;
+  if (paper) {
+    images = LoadDenseImages(
+        scene, masters, in.image_path, options.highpass_sigma_px, &unreadable);
+    for (const auto& [id, error] : unreadable) {
+      LOG(WARNING) << "left out: " << error;
+    }
+    cloud = DenseReconstruct(scene, images, masters, options, &report, &seen);
+  } else {
+    cloud = DenseReconstructMultiView(
+        scene, in.image_path, masters, options, &report, &seen, &unreadable);
+  }
   if (cloud.empty()) {
     throw RunFailure(StrCat("no dense point was matched in ",
                             masters.size(),
@@ -267,9 +334,13 @@ int RunDense(int argc, char** argv) {
   fs::create_directories(rejects_folder);
   for (const DenseMasterReport& master : report.masters) {
     if (!master.skipped.empty()) continue;
+    const cv::Mat color =
+        paper ? images.at(master.master).color
+              : LoadDenseImage(scene, master.master, in.image_path, 0, true)
+                    .color;
     WriteImage(
         (rejects_folder / fs::path(master.name).stem()).string() + ".png",
-        RejectMap(master, images.at(master.master).color));
+        RejectMap(master, color));
   }
   std::string left_out;
   for (const auto& [id, error] : unreadable) {

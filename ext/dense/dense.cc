@@ -51,7 +51,24 @@ DenseOptions::DenseOptions() {
 void DenseOptions::Check() const {
   CheckOption(
       highpass_sigma_px >= 0, "--highpass_sigma_px", ">= 0", highpass_sigma_px);
-  CheckOption(num_masters >= 1, "--num_masters", ">= 1", num_masters);
+  CheckOption(num_masters >= 0, "--num_masters", ">= 0", num_masters);
+  CheckOption(
+      max_image_size >= 16, "--max_image_size", ">= 16", max_image_size);
+  CheckOption(num_source_views >= 1 && num_source_views <= 32,
+              "--num_source_views",
+              "in [1, 32]",
+              num_source_views);
+  CheckOption(
+      min_triangulation_angle_deg >= 0 && min_triangulation_angle_deg < 90,
+      "--min_triangulation_angle_deg",
+      "in [0, 90)",
+      min_triangulation_angle_deg);
+  CheckOption(max_refine_shift_gsd > 0,
+              "--max_refine_shift_gsd",
+              "> 0",
+              max_refine_shift_gsd);
+  patch_match.Check();
+  fusion.Check();
   CheckOption(
       num_search_images >= 1, "--num_search_images", ">= 1", num_search_images);
   CheckOption(max_search_angle_deg > 0 && max_search_angle_deg < 180,
@@ -126,15 +143,15 @@ const char* DenseRejectName(DenseReject reason) {
       return "isolated";
     case DenseReject::kInconsistent:
       return "inconsistent";
+    case DenseReject::kMerged:
+      return "merged";
     case DenseReject::kNumReasons:
       break;
   }
   return "unknown";
 }
 
-namespace {
-
-DenseReject RejectOf(MpgcStatus status) {
+DenseReject DenseRejectOf(MpgcStatus status) {
   switch (status) {
     case MpgcStatus::kConverged:
       return DenseReject::kAccepted;
@@ -153,6 +170,8 @@ DenseReject RejectOf(MpgcStatus status) {
   }
   return DenseReject::kMpgcSingular;
 }
+
+namespace {
 
 const Camera& CameraOf(const Scene& scene, const Image& image) {
   return scene.cameras.at(image.camera_id);
@@ -236,7 +255,7 @@ std::vector<MasterSelection> SelectMasters(const Scene& scene,
     masters.push_back(first);
     std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
     while (static_cast<int>(masters.size()) <
-           std::min(options.num_masters, n)) {
+           std::min(options.num_masters > 0 ? options.num_masters : 5, n)) {
       int farthest = -1;
       for (int i = 0; i < n; ++i) {
         nearest[i] = std::min(
@@ -271,6 +290,52 @@ std::vector<MasterSelection> SelectMasters(const Scene& scene,
   return selections;
 }
 
+namespace {
+
+cv::Mat ReadColor8(const std::string& path) {
+  cv::Mat color = ReadImage(path, ImageReadMode::kColor);
+  if (color.depth() == CV_16U) color.convertTo(color, CV_8U, 1.0 / 257);
+  return color;
+}
+
+}  // namespace
+
+DenseImage LoadDenseImage(const Scene& scene,
+                          image_t image_id,
+                          const std::string& image_path,
+                          double highpass_sigma_px,
+                          bool color) {
+  DenseImage image;
+  const Image& record = scene.images.at(image_id);
+  const std::string path = image_path + "/" + record.name;
+  image.gray = ReadImageGrayFloat(path);
+  const Camera& camera = CameraOf(scene, record);
+  if (image.gray.cols != static_cast<int>(camera.width) ||
+      image.gray.rows != static_cast<int>(camera.height)) {
+    ThrowInputError(path,
+                    ": ",
+                    image.gray.cols,
+                    " x ",
+                    image.gray.rows,
+                    " pixels, but its camera in the model is ",
+                    camera.width,
+                    " x ",
+                    camera.height);
+  }
+  if (highpass_sigma_px > 0) {
+    // Shading and exposure change slowly across the image; texture does
+    // not. What the photographs' different light leaves of a patch is
+    // then mostly its texture, which least-squares matching's linear
+    // radiometric terms can follow (the paper's high-pass pre-processing
+    // for texture, sec. 3.5, applied here to the matching).
+    cv::Mat blurred;
+    cv::GaussianBlur(image.gray, blurred, cv::Size(), highpass_sigma_px);
+    image.gray = image.gray - blurred + 128.0f;
+  }
+  if (color) image.color = ReadColor8(path);
+  return image;
+}
+
 std::map<image_t, DenseImage> LoadDenseImages(
     const Scene& scene,
     const std::vector<MasterSelection>& masters,
@@ -280,39 +345,10 @@ std::map<image_t, DenseImage> LoadDenseImages(
   std::map<image_t, DenseImage> images;
   const auto read = [&](image_t id, bool color) {
     DenseImage& image = images[id];
-    const Image& record = scene.images.at(id);
-    const std::string path = image_path + "/" + record.name;
     if (image.gray.empty()) {
-      image.gray = ReadImageGrayFloat(path);
-      const Camera& camera = CameraOf(scene, record);
-      if (image.gray.cols != static_cast<int>(camera.width) ||
-          image.gray.rows != static_cast<int>(camera.height)) {
-        ThrowInputError(path,
-                        ": ",
-                        image.gray.cols,
-                        " x ",
-                        image.gray.rows,
-                        " pixels, but its camera in the model is ",
-                        camera.width,
-                        " x ",
-                        camera.height);
-      }
-      if (highpass_sigma_px > 0) {
-        // Shading and exposure change slowly across the image; texture does
-        // not. What the photographs' different light leaves of a patch is
-        // then mostly its texture, which least-squares matching's linear
-        // radiometric terms can follow (the paper's high-pass pre-processing
-        // for texture, sec. 3.5, applied here to the matching).
-        cv::Mat blurred;
-        cv::GaussianBlur(image.gray, blurred, cv::Size(), highpass_sigma_px);
-        image.gray = image.gray - blurred + 128.0f;
-      }
-    }
-    if (color && image.color.empty()) {
-      image.color = ReadImage(path, ImageReadMode::kColor);
-      if (image.color.depth() == CV_16U) {
-        image.color.convertTo(image.color, CV_8U, 1.0 / 257);
-      }
+      image = LoadDenseImage(scene, id, image_path, highpass_sigma_px, color);
+    } else if (color && image.color.empty()) {
+      image.color = ReadColor8(image_path + "/" + scene.images.at(id).name);
     }
   };
   const auto load = [&](image_t id, bool color) {
@@ -447,6 +483,17 @@ class SparseDepths {
   std::vector<std::vector<int>> buckets_;
 };
 
+}  // namespace
+
+std::pair<double, double> MasterDepthRange(const Scene& scene,
+                                           const Image& master,
+                                           const DenseOptions& options) {
+  const SparseDepths depths(scene, master, options);
+  return {depths.min_depth(), depths.max_depth()};
+}
+
+namespace {
+
 // The cells of a master's dense pattern: whole cells inside the border.
 void PatternSize(const cv::Mat& gray,
                  const DenseOptions& options,
@@ -520,7 +567,7 @@ void SolveCell(const MpgcView& master,
       MatchMpgc(master, cell->xy, shown, approximation, options.mpgc, normal);
   for (int& view : cell->mpgc.views) view = index[view];
   for (int& view : cell->mpgc.dropped) view = index[view];
-  cell->reason = RejectOf(cell->mpgc.status);
+  cell->reason = DenseRejectOf(cell->mpgc.status);
   if (!cell->mpgc.ok()) return;
   const double depth = (master.cam_from_world * cell->mpgc.xyz).z();
   const double gsd = depth / master.camera->MeanFocalLengthPx();
@@ -1277,6 +1324,9 @@ PointCloud DenseReconstruct(const Scene& scene,
 std::string DenseReport::Summary() const {
   std::ostringstream out;
   out.setf(std::ios::fixed);
+  // The multiview mode's cells are the depth maps' pixels.
+  const bool pixels = propagation_seconds > 0;
+  const char* cells = pixels ? " pixels" : " cells";
   std::array<size_t, static_cast<int>(DenseReject::kNumReasons)> rejects{};
   for (const DenseMasterReport& master : masters) {
     if (!master.skipped.empty()) {
@@ -1286,9 +1336,10 @@ std::string DenseReport::Summary() const {
     }
     out.precision(2);
     out << "  master " << master.name << " (" << master.search.size()
-        << " search images, depth " << master.min_depth << " to "
-        << master.max_depth << "): " << master.num_points << " of "
-        << master.num_cells << " cells, median sigma along the ray ";
+        << (pixels ? " source views" : " search images") << ", depth "
+        << master.min_depth << " to " << master.max_depth
+        << "): " << master.num_points << " points of " << master.num_cells
+        << cells << ", median sigma along the ray ";
     out.precision(2);
     out << master.median_sigma_gsd << " GSD, ";
     out.precision(1);
@@ -1305,11 +1356,16 @@ std::string DenseReport::Summary() const {
   out.precision(0);
   out << "\n"
       << num_points << " points from " << masters.size() << " masters, "
-      << num_cells << " cells in ";
+      << num_cells << cells << " in ";
   out.precision(1);
   out << seconds << " s (";
+  if (pixels) {
+    out << "depth maps " << propagation_seconds << " s, fusion "
+        << fusion_seconds << " s, MPGC " << mpgc_seconds << " s; ";
+  }
   out.precision(0);
-  out << CellsPerSecond() << " cells/s, " << PointsPerSecond() << " points/s)";
+  out << CellsPerSecond() << cells << "/s, " << PointsPerSecond()
+      << " points/s)";
   return out.str();
 }
 
@@ -1334,6 +1390,8 @@ std::optional<cv::Scalar> ReasonColor(DenseReject reason) {
       return cv::Scalar(160, 90, 140);
     case DenseReject::kInconsistent:
       return cv::Scalar(255, 255, 255);
+    case DenseReject::kMerged:
+      return cv::Scalar(150, 230, 150);
     case DenseReject::kNoTexture:
     case DenseReject::kNumReasons:
       return std::nullopt;

@@ -1,7 +1,23 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// `bayon dense`: the paper's section 3.3, a dense surface by multi-photo
-// geometrically constrained matching (mpgc.h) from a few master images.
+// `bayon dense`: a dense surface with a covariance for every point, by
+// multi-photo geometrically constrained matching (MPGC, mpgc.h). Two modes:
+//
+// multiview (the default; DenseReconstructMultiView):
+// 1. Every photograph a master; its source views are the images that share
+//    most sparse points with it seen at a triangulation angle of at least
+//    min_triangulation_angle_deg (by viewing direction where the model has
+//    no tracks).
+// 2. Per master, a depth and a normal for every pixel of the photograph
+//    shrunk to max_image_size (patch_match.h), streamed: each photograph is
+//    read once and kept at the working size only.
+// 3. The depth maps fused (fusion.h): a pixel whose depth and normal enough
+//    other masters confirm becomes one point with them.
+// 4. MPGC at full resolution for every fused point, from its position and
+//    normal, over the master and the source views that confirmed it; X, Y, Z
+//    with their covariance, and the precision test below.
+//
+// paper (--mode paper): the paper's section 3.3 from a few master images:
 //
 // 1. Masters and their search images by viewing geometry: every image's
 //    direction from the object centre (the median of the sparse points) to
@@ -43,7 +59,9 @@
 
 #include "ext/core/point_cloud.h"
 #include "ext/core/scene.h"
+#include "ext/dense/fusion.h"
 #include "ext/dense/mpgc.h"
+#include "ext/dense/patch_match.h"
 
 #include <array>
 #include <map>
@@ -52,14 +70,36 @@
 
 namespace bayon {
 
+enum class DenseMode { kMultiView, kPaper };
+
 struct DenseOptions {
+  DenseMode mode = DenseMode::kMultiView;
   // Radiometric pre-processing of the grey values for matching: minus their
   // Gaussian blur of this sigma (pixels; 0: off), so that photographs taken
   // in different light agree (LoadDenseImages).
   double highpass_sigma_px = 3.0;
-  int num_masters = 5;
+  // Masters: 0 for every photograph (multiview) or 5 (paper).
+  int num_masters = 0;
   // Explicit masters (image names); overrides num_masters.
   std::vector<std::string> master_names;
+
+  // multiview: the depth maps' size (the photographs shrunk by the smallest
+  // whole factor that brings the longer side to this at most), source views
+  // per master, and the smallest triangulation angle of a shared sparse
+  // point that makes an image a source.
+  int max_image_size = 1600;
+  int num_source_views = 4;
+  double min_triangulation_angle_deg = 3;
+  PatchMatchOptions patch_match;
+  FusionOptions fusion;
+  // MPGC for every fused point; off: the fused points as they are, without
+  // covariance.
+  bool refine = true;
+  // A refined point further along its master ray from the fused one than
+  // this many GSDs of the depth map is rejected (off_surface).
+  double max_refine_shift_gsd = 2.0;
+
+  // paper: search images per master (nearest viewing directions).
   int num_search_images = 6;
   // The search along the master ray correlates with the nearest this many
   // search images (the best two of them score each sample).
@@ -146,7 +186,9 @@ enum class DenseReject {
   kOffSurface,    // off the plane of its neighbours
   kIsolated,      // too few accepted neighbours to confirm it
   kInconsistent,  // in front of another master's surface, or behind it
-                  // though matched in that master
+                  // though matched in that master; multiview: too few
+                  // other depth maps agree
+  kMerged,        // multiview: part of a point of another master
   kNumReasons
 };
 const char* DenseRejectName(DenseReject reason);
@@ -181,6 +223,8 @@ struct DenseReport {
   size_t num_points = 0;
   size_t num_cells = 0;
   double seconds = 0;
+  // multiview: the time of the depth maps, the fusion and MPGC.
+  double propagation_seconds = 0, fusion_seconds = 0, mpgc_seconds = 0;
   // Rates over the whole run: cells tried (every one of the pattern) and
   // points accepted.
   double CellsPerSecond() const {
@@ -214,6 +258,47 @@ PointCloud DenseReconstruct(const Scene& scene,
                             const DenseOptions& options,
                             DenseReport* report,
                             std::vector<std::vector<image_t>>* visibility);
+
+// multiview: every image (or the named ones) a master, with its source
+// views (MasterSelection::search) by shared sparse points; InputError as
+// SelectMasters.
+std::vector<MasterSelection> SelectMultiViewMasters(
+    const Scene& scene, const DenseOptions& options);
+
+// multiview: the points of the masters' depth maps, fused and refined by
+// MPGC (see the top of this file), with the attributes and `visibility` of
+// DenseReconstruct. The photographs are read from `image_path` as they are
+// needed and kept at the depth maps' size; at full size only a master and
+// its sources at a time. One that cannot be read is left out with its error
+// in `unreadable` (InputError without it); masters that cannot be matched
+// are skipped with the reason in their report; InputError when none can.
+PointCloud DenseReconstructMultiView(
+    const Scene& scene,
+    const std::string& image_path,
+    const std::vector<MasterSelection>& masters,
+    const DenseOptions& options,
+    DenseReport* report,
+    std::vector<std::vector<image_t>>* visibility,
+    std::map<image_t, std::string>* unreadable = nullptr);
+
+// One image as the dense stages match it (LoadDenseImages; `color` too if
+// asked); InputError when it cannot be read or has another size than its
+// camera.
+DenseImage LoadDenseImage(const Scene& scene,
+                          image_t image_id,
+                          const std::string& image_path,
+                          double highpass_sigma_px,
+                          bool color);
+
+// The MPGC status as a reject reason (kAccepted when converged).
+DenseReject DenseRejectOf(MpgcStatus status);
+
+// A master's depth range from the sparse points it sees (or that project
+// into it), widened by depth_margin; the options' range where given;
+// InputError where neither says.
+std::pair<double, double> MasterDepthRange(const Scene& scene,
+                                           const Image& master,
+                                           const DenseOptions& options);
 
 // Loads the images `masters` need from `image_path` (by the scene's names),
 // the grey values high-pass filtered (minus their Gaussian blur of

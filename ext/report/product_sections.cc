@@ -102,18 +102,30 @@ Section DenseSection(const Workspace& ws, Page* page) {
     return section;
   }
   const Json& d = ws.dense.json;
+  // The paper's mode tries cells of a Moravec point each; the multiview
+  // mode the pixels of the depth maps.
+  const bool paper = String(d, "mode") != "multiview";
+  const std::string cells = paper ? "cells" : "pixels";
   KeyValueTable facts;
   facts.Add("Points", CountOf(d, "num_points"));
-  facts.Add("Cells tried (one Moravec point each)", CountOf(d, "num_cells"));
+  facts.Add(
+      paper ? "Cells tried (one Moravec point each)" : "Depth-map pixels tried",
+      CountOf(d, "num_cells"));
   if (Integer(d, "num_cells") > 0) {
     facts.Add(
         "Yield",
         FormatPercent(Number(d, "num_points") / Number(d, "num_cells"), 1));
   }
-  facts.Add("Cell size", CountOf(d, "cell_size") + " px");
+  if (paper) facts.Add("Cell size", CountOf(d, "cell_size") + " px");
   facts.Add("Time",
             FormatSeconds(Number(d, "seconds")) + " (" +
                 FormatFixed(Number(d, "points_per_second"), 0) + " points/s)");
+  if (!paper) {
+    facts.Add("Time split",
+              "depth maps " + FormatSeconds(Number(d, "propagation_seconds")) +
+                  ", fusion " + FormatSeconds(Number(d, "fusion_seconds")) +
+                  ", MPGC " + FormatSeconds(Number(d, "mpgc_seconds")));
+  }
   section.html += facts.Html();
 
   // Reasons that occur anywhere, in the order of the first master's.
@@ -130,8 +142,8 @@ Section DenseSection(const Workspace& ws, Page* page) {
   // table (thirteen reasons do not fit as columns).
   const Json& masters = Child(d, "masters");
   HtmlTable table({"Master",
-                   "Search images",
-                   "Cells",
+                   paper ? "Search images" : "Source views",
+                   paper ? "Cells" : "Pixels",
                    "Points",
                    "Yield",
                    "Median &sigma; [GSD]",
@@ -175,8 +187,9 @@ Section DenseSection(const Workspace& ws, Page* page) {
     chart.horizontal = true;
     chart.chart.width_px = 600;
     chart.chart.height_px = 0;
-    chart.chart.title = "Cells per master: points and reject reasons";
-    chart.chart.x_label = "cells";
+    chart.chart.title = (paper ? "Cells" : "Pixels") +
+                        std::string(" per master: points and reject reasons");
+    chart.chart.x_label = cells;
     chart.series = {{"points", "#4c78a8"}};
     for (size_t i = 0; i < reasons.size(); ++i) {
       chart.series.push_back({reasons[i], kPalette[(i + 1) % kPaletteSize]});

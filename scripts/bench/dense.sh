@@ -1,19 +1,20 @@
 #!/usr/bin/env bash
-# `bayon dense` (MPGC, CPU): points per second, peak memory and, where the
-# truth is known, accuracy and completeness.
+# `bayon dense` (MPGC, CPU): points per second, peak memory, the time split
+# of the multiview mode and, where the truth is known, accuracy and
+# completeness.
 #   tower     the rendered tower (`bayon synth --scene tower`, 1800 x 1200,
 #             16 views) with its true orientation and calibration and tie
-#             points triangulated into it, 5 masters; judged by
-#             `bayon evaluate` against the true surface
-#             (completeness within 5 GSD: the dense pattern's 7-pixel cells
-#             leave points about 5 pixels apart at most)
-#   tower_16  the same with all 16 photographs as masters
+#             points triangulated into it, the default (multiview: every
+#             photograph a master); judged by `bayon evaluate` against the
+#             true surface (completeness within 5 GSD)
+#   paper     the same with `--mode paper` (5 masters, 7-pixel cells: the
+#             paper's sampling, the reproduction row)
 #   one_light the same tower with every photograph in the first one's
 #             light (`synth --one_light 1`), the same model: a control for
 #             what the photographs' changing sun costs
 #   temple    ../shared/data/temple-ring, bayon's own orientation (the chain
 #   fountain  benchmark's adjusted models; it runs first where they are
-#             missing), 5 masters
+#             missing), the default
 # Threads: $BAYON_THREADS (default 2, the CI machine's cores).
 set -euo pipefail
 dir="$(cd "$(dirname "$0")/../.." && pwd)/build/bench/dense"
@@ -83,10 +84,9 @@ evaluate() {
 }
 dense tower "$tower/ws/images" "$tower/model"
 evaluate tower "$tower/ws/gt"
-# Every photograph a master: how the points grow with the masters (the
-# issue's figure is for 5).
-dense tower_16 "$tower/ws/images" "$tower/model" --num_masters 16
-evaluate tower_16 "$tower/ws/gt"
+# The paper's sampling, as the reproduction rows measured it.
+dense paper "$tower/ws/images" "$tower/model" --mode paper --num_masters 5
+evaluate paper "$tower/ws/gt"
 # The control: the same tower, stations and noise, every photograph in the
 # first one's light (`synth --one_light 1`), with the same model: what the
 # changing light of the photographs costs.
@@ -99,16 +99,20 @@ dense temple "$BAYON_DATA_DIR/temple-ring" "$chain_dir/temple/adjusted"
 dense fountain "$BAYON_DATA_DIR/fountain-P11/images" \
   "$chain_dir/fountain/adjusted"
 
-printf '\n%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s\n' set cells \
+printf '\n%-9s %9s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s %6s %6s %6s\n' set cells \
   points time "cells/s" "points/s" peak "acc med" "acc RMS" "acc p95" complete \
-  walls tops
-printf '%-9s %8s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s\n' "" "" "" s "" "" \
-  MB GSD GSD GSD "5 GSD" "5 GSD" "5 GSD"
-for name in tower tower_16 one_light temple fountain; do
-  read -r cells points < <(python3 -c '
+  walls tops depth fusion MPGC
+printf '%-9s %9s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s %6s %6s %6s\n' "" "" "" s "" "" \
+  MB GSD GSD GSD "5 GSD" "5 GSD" "5 GSD" s s s
+for name in tower paper one_light temple fountain; do
+  read -r cells points split < <(python3 -c '
 import json, sys
 r = json.load(open(sys.argv[1]))
-print(r["num_cells"], r["num_points"])' "$dir/$name/dense/points.json")
+split = "- - -"
+if r.get("mode") == "multiview":
+    split = "%.0f %.0f %.0f" % (r["propagation_seconds"], r["fusion_seconds"],
+                                r["mpgc_seconds"])
+print(r["num_cells"], r["num_points"], split)' "$dir/$name/dense/points.json")
   t=$(wall_s "$dir/$name/dense")
   m=$(peak_mb "$dir/$name/dense")
   accuracy="- - - - - -"
@@ -125,17 +129,18 @@ print("%.2f %.2f %.2f %.1f%% %.1f%% %.1f%%" % (
       "$dir/$name/evaluation.json")
   fi
   read -r med rms p95 complete walls tops <<<"$accuracy"
+  read -r t_depth t_fusion t_mpgc <<<"$split"
   awk -v n="$name" -v c="$cells" -v p="$points" -v t="$t" -v m="$m" \
     -v a="$med" -v r="$rms" -v q="$p95" -v k="$complete" -v w="$walls" \
-    -v u="$tops" 'BEGIN {
-      printf "%-9s %8d %8d %8.1f %8.0f %9.0f %9d %7s %9s %9s %9s %7s %7s\n",
-        n, c, p, t, c / t, p / t, m, a, r, q, k, w, u }'
+    -v u="$tops" -v d="$t_depth" -v f="$t_fusion" -v g="$t_mpgc" 'BEGIN {
+      printf "%-9s %9d %8d %8.1f %8.0f %9.0f %9d %7s %9s %9s %9s %7s %7s %6s %6s %6s\n",
+        n, c, p, t, c / t, p / t, m, a, r, q, k, w, u, d, f, g }'
 done
 echo
-echo "cells: the dense pattern's cells in all masters (each tried: textured"
-echo "ones matched, the rest rejected at once); points: those accepted."
-echo "tower: true orientation with triangulated tie points, 5 masters; tower_16:"
-echo "the same, every photograph a master; one_light: the"
+echo "cells: multiview, the depth maps' pixels (every photograph a master);"
+echo "paper, the dense pattern's 7-pixel cells of 5 masters; points: those"
+echo "accepted. depth, fusion, MPGC: multiview's time split (s)."
+echo "tower, paper: true orientation with triangulated tie points; one_light: the"
 echo "same tower photographed in one light (synth --one_light 1); temple, fountain:"
 echo "bayon's own orientation (chain.sh)."
 echo "complete: share of the true surface seen in 2 or more photographs within 5"

@@ -1,0 +1,511 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// `bayon dense` in its default mode: depth maps for every photograph, fused,
+// then MPGC for every point (dense.h).
+#include "ext/core/errors.h"
+#include "ext/core/parallel.h"
+#include "ext/core/progress.h"
+#include "ext/core/statistics.h"
+#include "ext/dense/dense.h"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <numeric>
+#include <set>
+
+namespace bayon {
+namespace {
+
+double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI;
+}
+
+// The smallest whole factor that brings the longer side to max_image_size.
+int Downscale(const Camera& camera, int max_image_size) {
+  const int longer = static_cast<int>(std::max(camera.width, camera.height));
+  return std::max(1, (longer + max_image_size - 1) / max_image_size);
+}
+
+struct MasterState {
+  std::vector<int> sources;  // indices into the masters
+  std::string skipped;
+  double min_depth = 0, max_depth = 0;
+  DepthMap map;
+  double seconds = 0;
+};
+
+}  // namespace
+
+std::vector<MasterSelection> SelectMultiViewMasters(
+    const Scene& scene, const DenseOptions& options) {
+  options.Check();
+  if (scene.images.size() < 2) {
+    ThrowInputError(
+        "dense matching needs two or more oriented images; the model has ",
+        scene.images.size());
+  }
+  std::vector<image_t> masters;
+  if (options.master_names.empty() && options.num_masters == 0) {
+    for (const auto& [id, image] : scene.images) masters.push_back(id);
+  } else if (options.master_names.empty()) {
+    // A few masters spread over the viewing directions, as the paper's.
+    for (const MasterSelection& selection : SelectMasters(scene, options)) {
+      masters.push_back(selection.master);
+    }
+  } else {
+    for (const std::string& name : options.master_names) {
+      const Image* image = scene.FindImageByName(name);
+      if (image == nullptr) {
+        ThrowInputError(
+            "--master_names: the model has no image named '", name, "'");
+      }
+      masters.push_back(image->image_id);
+    }
+  }
+  // Per pair of images, the shared sparse points seen at a good angle.
+  std::map<std::pair<image_t, image_t>, int> shared;
+  for (const auto& [id, point] : scene.points3D) {
+    for (size_t a = 0; a < point.track.size(); ++a) {
+      const Image& first = scene.images.at(point.track[a].image_id);
+      const Eigen::Vector3d ray_a = point.xyz - first.cam_from_world.Center();
+      for (size_t b = a + 1; b < point.track.size(); ++b) {
+        const Image& second = scene.images.at(point.track[b].image_id);
+        if (first.image_id == second.image_id) continue;
+        const double angle =
+            AngleDeg(ray_a, point.xyz - second.cam_from_world.Center());
+        if (angle < options.min_triangulation_angle_deg ||
+            angle > options.max_search_angle_deg) {
+          continue;
+        }
+        ++shared[{first.image_id, second.image_id}];
+        ++shared[{second.image_id, first.image_id}];
+      }
+    }
+  }
+  std::vector<MasterSelection> selections;
+  for (image_t master : masters) {
+    MasterSelection selection;
+    selection.master = master;
+    std::vector<std::pair<int, image_t>> by_shared;
+    for (const auto& [id, image] : scene.images) {
+      const auto it = shared.find({master, id});
+      if (it != shared.end()) by_shared.push_back({-it->second, id});
+    }
+    std::sort(by_shared.begin(), by_shared.end());
+    for (const auto& [count, id] : by_shared) {
+      if (static_cast<int>(selection.search.size()) >=
+          options.num_source_views) {
+        break;
+      }
+      selection.search.push_back(id);
+    }
+    selections.push_back(std::move(selection));
+  }
+  // Without tracks (a model of poses only): the nearest viewing directions,
+  // as the paper's mode chooses its search images.
+  if (scene.points3D.empty()) {
+    DenseOptions by_direction = options;
+    by_direction.master_names.clear();
+    for (image_t id : masters) {
+      by_direction.master_names.push_back(scene.images.at(id).name);
+    }
+    by_direction.num_search_images = options.num_source_views;
+    return SelectMasters(scene, by_direction);
+  }
+  return selections;
+}
+
+PointCloud DenseReconstructMultiView(
+    const Scene& scene,
+    const std::string& image_path,
+    const std::vector<MasterSelection>& masters,
+    const DenseOptions& options,
+    DenseReport* report,
+    std::vector<std::vector<image_t>>* visibility,
+    std::map<image_t, std::string>* unreadable) {
+  options.Check();
+  const Timer total_timer;
+  DenseReport local_report;
+  if (report == nullptr) report = &local_report;
+  *report = DenseReport();
+  const int num_masters = static_cast<int>(masters.size());
+  std::map<image_t, int> master_index;
+  for (int m = 0; m < num_masters; ++m) master_index[masters[m].master] = m;
+
+  // 1. Every photograph once, kept at the depth maps' size (a source that
+  //    is not itself a master as well).
+  std::set<image_t> needed;
+  for (const MasterSelection& selection : masters) {
+    needed.insert(selection.master);
+    needed.insert(selection.search.begin(), selection.search.end());
+  }
+  const std::vector<image_t> ids(needed.begin(), needed.end());
+  std::map<image_t, PinholeView> views;
+  std::map<image_t, std::string> errors;
+  std::mutex mutex;
+  ParallelFor(static_cast<int>(ids.size()), options.num_threads, [&](int k) {
+    const image_t id = ids[k];
+    const Image& image = scene.images.at(id);
+    const Camera& camera = scene.cameras.at(image.camera_id);
+    try {
+      const DenseImage full = LoadDenseImage(
+          scene, id, image_path, options.highpass_sigma_px, true);
+      PinholeView view =
+          MakePinholeView(camera,
+                          image.frame ? &*image.frame : nullptr,
+                          image.cam_from_world,
+                          full.gray,
+                          full.color,
+                          Downscale(camera, options.max_image_size));
+      const std::lock_guard<std::mutex> lock(mutex);
+      views.emplace(id, std::move(view));
+    } catch (const InputError& error) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      errors.emplace(id, error.what());
+    }
+  });
+  if (!errors.empty() && unreadable == nullptr) {
+    ThrowInputError(errors.begin()->second);
+  }
+  if (unreadable != nullptr) unreadable->insert(errors.begin(), errors.end());
+
+  // 2. The depth maps, one master after the other (each in parallel).
+  std::vector<MasterState> states(num_masters);
+  size_t total_pixels = 0;
+  for (int m = 0; m < num_masters; ++m) {
+    MasterState& state = states[m];
+    const MasterSelection& selection = masters[m];
+    if (selection.search.empty()) {
+      state.skipped =
+          "no other image shares sparse points with it at a triangulation "
+          "angle of --min_triangulation_angle_deg or more";
+    } else if (views.count(selection.master) == 0) {
+      state.skipped = "its image could not be read";
+    } else {
+      for (image_t id : selection.search) {
+        if (views.count(id) > 0) state.sources.push_back(static_cast<int>(id));
+      }
+      if (state.sources.empty()) {
+        state.skipped = "none of its source images could be read";
+      }
+    }
+    if (state.skipped.empty()) {
+      try {
+        std::tie(state.min_depth, state.max_depth) =
+            MasterDepthRange(scene, scene.images.at(selection.master), options);
+      } catch (const InputError& error) {
+        state.skipped = error.what();
+      }
+    }
+    if (state.skipped.empty()) {
+      total_pixels += views.at(selection.master).gray.total();
+    }
+  }
+  if (std::all_of(states.begin(), states.end(), [](const MasterState& s) {
+        return !s.skipped.empty();
+      })) {
+    std::string reasons;
+    for (int m = 0; m < num_masters; ++m) {
+      reasons += StrCat(m == 0 ? "" : "; ",
+                        scene.images.at(masters[m].master).name,
+                        ": ",
+                        states[m].skipped);
+    }
+    ThrowInputError("no master image can be matched (", reasons, ")");
+  }
+  Timer stage_timer;
+  {
+    Progress progress("depth maps", total_pixels, "pixels");
+    for (int m = 0; m < num_masters; ++m) {
+      MasterState& state = states[m];
+      if (!state.skipped.empty()) continue;
+      const Image& master = scene.images.at(masters[m].master);
+      const PinholeView& view = views.at(master.image_id);
+      std::vector<const PinholeView*> sources;
+      for (int id : state.sources) {
+        sources.push_back(&views.at(static_cast<image_t>(id)));
+      }
+      // The sparse points the master sees start their pixels.
+      std::vector<DepthSeed> seeds;
+      for (const Point2D& point2D : master.points2D) {
+        if (!point2D.HasPoint3D()) continue;
+        const Eigen::Vector3d in_cam =
+            master.cam_from_world * scene.points3D.at(point2D.point3D_id).xyz;
+        const Eigen::Vector3d h = view.K * in_cam;
+        if (in_cam.z() <= 0) continue;
+        seeds.push_back({h.head<2>() / h.z(), in_cam.z()});
+      }
+      const Timer timer;
+      state.map = EstimateDepthMap(view,
+                                   sources,
+                                   state.min_depth,
+                                   state.max_depth,
+                                   seeds,
+                                   options.patch_match,
+                                   options.num_threads);
+      state.seconds = timer.Seconds();
+      progress.Add(view.gray.total());
+    }
+    progress.Finish();
+  }
+  report->propagation_seconds = stage_timer.Seconds();
+
+  // 3. Fusion over the masters that were matched.
+  stage_timer = Timer();
+  std::vector<int> matched;  // master indices
+  std::vector<const PinholeView*> matched_views;
+  std::vector<const DepthMap*> matched_maps;
+  for (int m = 0; m < num_masters; ++m) {
+    if (!states[m].skipped.empty()) continue;
+    matched.push_back(m);
+    matched_views.push_back(&views.at(masters[m].master));
+    matched_maps.push_back(&states[m].map);
+  }
+  std::vector<std::vector<FusionVerdict>> verdicts;
+  std::vector<FusedPoint> fused =
+      FuseDepthMaps(matched_views, matched_maps, options.fusion, &verdicts);
+  report->fusion_seconds = stage_timer.Seconds();
+  // The depth maps are done with; the fused points and verdicts remain.
+  for (MasterState& state : states) state.map = DepthMap();
+
+  // 4. MPGC at full size, master by master (the fused points are in master
+  //    order), over the master's sources that confirmed each point.
+  stage_timer = Timer();
+  std::vector<DenseReject> verdict_of(fused.size(), DenseReject::kAccepted);
+  std::vector<MpgcResult> results(fused.size());
+  std::vector<std::vector<image_t>> search_of(fused.size());
+  for (size_t k = 0; k < fused.size(); ++k) {
+    // The masters that confirmed the point, the master's sources first (most
+    // shared points), num_source_views at most.
+    const std::vector<image_t>& sources =
+        masters[matched[fused[k].master]].search;
+    std::vector<image_t> confirmed;
+    for (int v : fused[k].views)
+      confirmed.push_back(masters[matched[v]].master);
+    std::stable_partition(confirmed.begin(), confirmed.end(), [&](image_t id) {
+      return std::find(sources.begin(), sources.end(), id) != sources.end();
+    });
+    if (static_cast<int>(confirmed.size()) > options.num_source_views) {
+      confirmed.resize(options.num_source_views);
+    }
+    search_of[k] = std::move(confirmed);
+  }
+  if (options.refine) {
+    // A fused point was confirmed by min_consistent_views other masters;
+    // MPGC keeps it with as many search images.
+    MpgcOptions mpgc = options.mpgc;
+    mpgc.min_search_views = std::max(1, options.fusion.min_consistent_views);
+    // The full-size photographs of one master's points at a time; those
+    // the next master needs as well stay.
+    std::map<image_t, cv::Mat> resident;
+    Progress progress("MPGC", fused.size(), "points");
+    size_t begin = 0;
+    while (begin < fused.size()) {
+      size_t end = begin;
+      while (end < fused.size() && fused[end].master == fused[begin].master) {
+        ++end;
+      }
+      const Image& master =
+          scene.images.at(masters[matched[fused[begin].master]].master);
+      std::set<image_t> group = {master.image_id};
+      for (size_t k = begin; k < end; ++k) {
+        group.insert(search_of[k].begin(), search_of[k].end());
+      }
+      std::map<image_t, cv::Mat> next;
+      for (image_t id : group) {
+        const auto it = resident.find(id);
+        next[id] =
+            it != resident.end()
+                ? it->second
+                : LoadDenseImage(
+                      scene, id, image_path, options.highpass_sigma_px, false)
+                      .gray;
+      }
+      resident = std::move(next);
+      std::map<image_t, MpgcView> mpgc_views;
+      for (image_t id : group) {
+        const Image& image = scene.images.at(id);
+        MpgcView view;
+        view.image = &resident.at(id);
+        view.camera = &scene.cameras.at(image.camera_id);
+        view.cam_from_world = image.cam_from_world;
+        view.frame = image.frame ? &*image.frame : nullptr;
+        mpgc_views.emplace(id, view);
+      }
+      const MpgcView& master_view = mpgc_views.at(master.image_id);
+      const Eigen::Vector3d centre = master.cam_from_world.Center();
+      const double focal = master_view.camera->MeanFocalLengthPx();
+      const double working_focal = views.at(master.image_id).K(0, 0);
+      ParallelFor(
+          static_cast<int>(end - begin), options.num_threads, [&](int i) {
+            const size_t k = begin + i;
+            const FusedPoint& point = fused[k];
+            Eigen::Vector2d xy;
+            if (!scene.Project(master, point.xyz, &xy)) {
+              verdict_of[k] = DenseReject::kMpgcBehind;
+              return;
+            }
+            std::vector<MpgcView> search;
+            for (image_t id : search_of[k]) search.push_back(mpgc_views.at(id));
+            MpgcResult& result = results[k];
+            result = MatchMpgc(master_view,
+                               xy,
+                               search,
+                               point.xyz,
+                               mpgc,
+                               point.normal.cast<double>());
+            if (!result.ok()) {
+              verdict_of[k] = DenseRejectOf(result.status);
+              return;
+            }
+            const Eigen::Vector3d ray = (result.xyz - centre).normalized();
+            const double depth = (result.xyz - centre).norm();
+            const double sigma_ray =
+                std::sqrt(std::max(0.0, ray.dot(result.covariance * ray)));
+            if (sigma_ray > options.max_sigma_gsd * depth / focal) {
+              verdict_of[k] = DenseReject::kImprecise;
+            } else if ((result.xyz - point.xyz).norm() >
+                       options.max_refine_shift_gsd * depth / working_focal) {
+              verdict_of[k] = DenseReject::kOffSurface;
+            }
+          });
+      progress.Add(end - begin);
+      begin = end;
+    }
+    progress.Finish();
+  }
+  report->mpgc_seconds = stage_timer.Seconds();
+
+  // 5. The cloud, and per master what became of its pixels.
+  PointCloud cloud;
+  std::vector<double> sx, sy, sz, s_normal, num_images, master_ids, sigma0,
+      correlation;
+  for (int m = 0; m < num_masters; ++m) {
+    DenseMasterReport& entry = report->masters.emplace_back();
+    entry.master = masters[m].master;
+    entry.name = scene.images.at(entry.master).name;
+    entry.skipped = states[m].skipped;
+    entry.min_depth = states[m].min_depth;
+    entry.max_depth = states[m].max_depth;
+    entry.seconds = states[m].seconds;
+    for (int id : states[m].sources) {
+      entry.search.push_back(static_cast<image_t>(id));
+    }
+  }
+  for (size_t j = 0; j < matched.size(); ++j) {
+    DenseMasterReport& entry = report->masters[matched[j]];
+    const PinholeView& view = *matched_views[j];
+    entry.cell_size =
+        Downscale(scene.cameras.at(scene.images.at(entry.master).camera_id),
+                  options.max_image_size);
+    entry.border = 0;
+    entry.reasons = cv::Mat(view.height(), view.width(), CV_8U);
+    entry.num_cells = view.gray.total();
+    for (size_t p = 0; p < verdicts[j].size(); ++p) {
+      DenseReject reason = DenseReject::kNoTexture;
+      switch (verdicts[j][p]) {
+        case FusionVerdict::kNone:
+          reason = DenseReject::kNoTexture;
+          break;
+        case FusionVerdict::kPoorMatch:
+          reason = DenseReject::kNoApproximation;
+          break;
+        case FusionVerdict::kInconsistent:
+          reason = DenseReject::kInconsistent;
+          break;
+        case FusionVerdict::kPoint:
+          reason = DenseReject::kAccepted;  // MPGC's verdict below
+          break;
+        case FusionVerdict::kMerged:
+          reason = DenseReject::kMerged;
+          break;
+      }
+      entry.reasons.at<uint8_t>(static_cast<int>(p)) =
+          static_cast<uint8_t>(reason);
+    }
+  }
+  std::vector<std::vector<double>> sigmas(num_masters);
+  for (size_t k = 0; k < fused.size(); ++k) {
+    const FusedPoint& point = fused[k];
+    const int m = matched[point.master];
+    DenseMasterReport& entry = report->masters[m];
+    const PinholeView& view = *matched_views[point.master];
+    const int px = static_cast<int>(point.master_xy.x());
+    const int py = static_cast<int>(point.master_xy.y());
+    entry.reasons.at<uint8_t>(py, px) = static_cast<uint8_t>(verdict_of[k]);
+    if (verdict_of[k] != DenseReject::kAccepted) continue;
+    const MpgcResult& result = results[k];
+    const bool refined = options.refine;
+    cloud.positions.push_back(refined ? result.xyz : point.xyz);
+    cloud.normals.push_back(point.normal);
+    const cv::Vec3b& bgr = view.color.empty()
+                               ? cv::Vec3b(128, 128, 128)
+                               : view.color.at<cv::Vec3b>(py, px);
+    cloud.colors.emplace_back(bgr[2], bgr[1], bgr[0]);
+    const Eigen::Vector3d sigma =
+        refined ? result.StdDev() : Eigen::Vector3d::Zero();
+    sx.push_back(sigma.x());
+    sy.push_back(sigma.y());
+    sz.push_back(sigma.z());
+    const Eigen::Vector3d normal = point.normal.cast<double>();
+    s_normal.push_back(
+        refined
+            ? std::sqrt(std::max(0.0, normal.dot(result.covariance * normal)))
+            : 0.0);
+    std::vector<image_t> seen = {masters[m].master};
+    if (refined) {
+      for (int v : result.views) seen.push_back(search_of[k][v]);
+    } else {
+      for (int v : point.views) seen.push_back(masters[matched[v]].master);
+    }
+    num_images.push_back(static_cast<double>(seen.size()));
+    master_ids.push_back(masters[m].master);
+    sigma0.push_back(refined ? result.sigma0 : 0.0);
+    correlation.push_back(
+        refined
+            ? std::accumulate(
+                  result.correlation.begin(), result.correlation.end(), 0.0) /
+                  std::max<size_t>(1, result.correlation.size())
+            : 1.0 - point.cost);
+    if (refined) {
+      const Eigen::Vector3d centre =
+          scene.images.at(masters[m].master).cam_from_world.Center();
+      const Eigen::Vector3d ray = (result.xyz - centre).normalized();
+      const double gsd =
+          (result.xyz - centre).norm() /
+          scene.cameras.at(scene.images.at(masters[m].master).camera_id)
+              .MeanFocalLengthPx();
+      sigmas[m].push_back(
+          std::sqrt(std::max(0.0, ray.dot(result.covariance * ray))) / gsd);
+    }
+    if (visibility != nullptr) visibility->push_back(std::move(seen));
+  }
+  cloud.AddAttribute("sx", PlyScalarType::kFloat).values = std::move(sx);
+  cloud.AddAttribute("sy", PlyScalarType::kFloat).values = std::move(sy);
+  cloud.AddAttribute("sz", PlyScalarType::kFloat).values = std::move(sz);
+  cloud.AddAttribute("s_normal", PlyScalarType::kFloat).values =
+      std::move(s_normal);
+  cloud.AddAttribute("num_images", PlyScalarType::kUChar).values =
+      std::move(num_images);
+  cloud.AddAttribute("master_id", PlyScalarType::kInt).values =
+      std::move(master_ids);
+  cloud.AddAttribute("sigma0", PlyScalarType::kFloat).values =
+      std::move(sigma0);
+  cloud.AddAttribute("correlation", PlyScalarType::kFloat).values =
+      std::move(correlation);
+  for (size_t j = 0; j < matched.size(); ++j) {
+    DenseMasterReport& entry = report->masters[matched[j]];
+    for (int r = 0; r < entry.reasons.rows * entry.reasons.cols; ++r) {
+      ++entry.rejects[entry.reasons.at<uint8_t>(r)];
+    }
+    entry.num_points = entry.rejects[static_cast<int>(DenseReject::kAccepted)];
+    entry.median_sigma_gsd = Median(sigmas[matched[j]]);
+    report->num_points += entry.num_points;
+    report->num_cells += entry.num_cells;
+  }
+  report->seconds = total_timer.Seconds();
+  return cloud;
+}
+
+}  // namespace bayon

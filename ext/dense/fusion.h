@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Fusion of the masters' depth maps (patch_match.h) into one cloud. A pixel
+// becomes a point when its plane was matched well (cost at most max_cost)
+// and the depth maps of at least min_consistent_views other masters agree
+// with it: the point projects into them onto a pixel whose depth is the
+// point's within max_depth_error (relative) and whose normal is within
+// max_normal_error_deg of its own. The pixel and those that agree and are
+// not yet part of a point become one point, the mean of their object
+// points, so that each surface element gives one point however many
+// masters saw it (masters in the order given, pixels in row order: the
+// result does not depend on the threads).
+#pragma once
+
+#include "ext/dense/patch_match.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+namespace bayon {
+
+struct FusionOptions {
+  int min_consistent_views = 2;
+  double max_depth_error = 0.01;
+  double max_normal_error_deg = 30;
+  double max_cost = 0.6;
+  void Check() const;  // throws InputError naming field, value, rule
+};
+
+// What became of a depth map's pixel in the fusion.
+enum class FusionVerdict : uint8_t {
+  kNone = 0,      // no depth (no texture, at the border)
+  kPoorMatch,     // cost above max_cost
+  kInconsistent,  // too few other depth maps agree
+  kPoint,         // became a point (this master's)
+  kMerged,        // part of a point of another master
+};
+
+struct FusedPoint {
+  Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // object system, unit
+  int master = -1;                                   // index into the maps
+  Eigen::Vector2d master_xy;  // working pixels of the master
+  std::vector<int> views;     // the other maps that agreed
+  float cost = 0;             // the master pixel's matching cost
+};
+
+// `views[i]` is the pinhole view of `maps[i]`. `verdicts`, if not null,
+// gets one FusionVerdict per pixel of every map.
+std::vector<FusedPoint> FuseDepthMaps(
+    const std::vector<const PinholeView*>& views,
+    const std::vector<const DepthMap*>& maps,
+    const FusionOptions& options,
+    std::vector<std::vector<FusionVerdict>>* verdicts);
+
+}  // namespace bayon
