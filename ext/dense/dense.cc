@@ -1128,8 +1128,7 @@ PointCloud DenseReconstruct(const Scene& scene,
   std::vector<int> master_of;              // per point: index into masters
   std::vector<int> cell_of;                // per point: its master's cell
   PointCloud cloud;
-  std::vector<double> sx, sy, sz, s_normal, num_images, master_ids, sigma0,
-      correlation;
+  DensePointAttributes attributes;
   for (size_t m = 0; m < masters.size(); ++m) {
     const Timer timer;
     const MasterSelection& selection = masters[m];
@@ -1252,18 +1251,18 @@ PointCloud DenseReconstruct(const Scene& scene,
                                  ? Eigen::Matrix<uint8_t, 3, 1>(128, 128, 128)
                                  : ColorAt(color, cell.xy));
       const Eigen::Vector3d sigma = result.StdDev();
-      sx.push_back(sigma.x());
+      attributes.sx.push_back(sigma.x());
       // Across the surface, from the full covariance: the figure that
       // judges a point against its neighbours' surface (and the truth).
       const Eigen::Vector3d normal = cloud.normals.back().cast<double>();
-      s_normal.push_back(
+      attributes.s_normal.push_back(
           std::sqrt(std::max(0.0, normal.dot(result.covariance * normal))));
-      sy.push_back(sigma.y());
-      sz.push_back(sigma.z());
-      num_images.push_back(1 + result.views.size());
-      master_ids.push_back(selection.master);
-      sigma0.push_back(result.sigma0);
-      correlation.push_back(std::accumulate(result.correlation.begin(),
+      attributes.sy.push_back(sigma.y());
+      attributes.sz.push_back(sigma.z());
+      attributes.num_images.push_back(1 + result.views.size());
+      attributes.master_ids.push_back(selection.master);
+      attributes.sigma0.push_back(result.sigma0);
+      attributes.correlation.push_back(std::accumulate(result.correlation.begin(),
                                             result.correlation.end(),
                                             0.0) /
                             std::max<size_t>(1, result.correlation.size()));
@@ -1287,19 +1286,7 @@ PointCloud DenseReconstruct(const Scene& scene,
   progress.Finish();
   const std::vector<bool> keep = ConsistentWithOtherMasters(
       cloud.positions, master_of, seen, grids, masters, options);
-  cloud.AddAttribute("sx", PlyScalarType::kFloat).values = std::move(sx);
-  cloud.AddAttribute("sy", PlyScalarType::kFloat).values = std::move(sy);
-  cloud.AddAttribute("sz", PlyScalarType::kFloat).values = std::move(sz);
-  cloud.AddAttribute("s_normal", PlyScalarType::kFloat).values =
-      std::move(s_normal);
-  cloud.AddAttribute("num_images", PlyScalarType::kUChar).values =
-      std::move(num_images);
-  cloud.AddAttribute("master_id", PlyScalarType::kInt).values =
-      std::move(master_ids);
-  cloud.AddAttribute("sigma0", PlyScalarType::kFloat).values =
-      std::move(sigma0);
-  cloud.AddAttribute("correlation", PlyScalarType::kFloat).values =
-      std::move(correlation);
+  attributes.MoveInto(&cloud);
 
   for (size_t i = 0; i < keep.size(); ++i) {
     if (keep[i]) continue;
@@ -1319,6 +1306,22 @@ PointCloud DenseReconstruct(const Scene& scene,
   }
   report->seconds = total_timer.Seconds();
   return cloud;
+}
+
+void DensePointAttributes::MoveInto(PointCloud* cloud) {
+  cloud->AddAttribute("sx", PlyScalarType::kFloat).values = std::move(sx);
+  cloud->AddAttribute("sy", PlyScalarType::kFloat).values = std::move(sy);
+  cloud->AddAttribute("sz", PlyScalarType::kFloat).values = std::move(sz);
+  cloud->AddAttribute("s_normal", PlyScalarType::kFloat).values =
+      std::move(s_normal);
+  cloud->AddAttribute("num_images", PlyScalarType::kUChar).values =
+      std::move(num_images);
+  cloud->AddAttribute("master_id", PlyScalarType::kInt).values =
+      std::move(master_ids);
+  cloud->AddAttribute("sigma0", PlyScalarType::kFloat).values =
+      std::move(sigma0);
+  cloud->AddAttribute("correlation", PlyScalarType::kFloat).values =
+      std::move(correlation);
 }
 
 std::string DenseReport::Summary() const {

@@ -243,6 +243,14 @@ struct DenseImage {
   cv::Mat color;
 };
 
+// The per-point attributes of both modes, one value per point each, as
+// DenseReconstruct describes them; MoveInto adds them to the cloud.
+struct DensePointAttributes {
+  std::vector<double> sx, sy, sz, s_normal, num_images, master_ids, sigma0,
+      correlation;
+  void MoveInto(PointCloud* cloud);
+};
+
 // A cloud with per-point attributes sx sy sz (object units), s_normal (the
 // standard deviation along the point's normal, from the full covariance),
 // num_images,

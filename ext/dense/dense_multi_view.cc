@@ -379,8 +379,7 @@ PointCloud DenseReconstructMultiView(
 
   // 5. The cloud, and per master what became of its pixels.
   PointCloud cloud;
-  std::vector<double> sx, sy, sz, s_normal, num_images, master_ids, sigma0,
-      correlation;
+  DensePointAttributes attributes;
   for (int m = 0; m < num_masters; ++m) {
     DenseMasterReport& entry = report->masters.emplace_back();
     entry.master = masters[m].master;
@@ -445,11 +444,11 @@ PointCloud DenseReconstructMultiView(
     cloud.colors.emplace_back(bgr[2], bgr[1], bgr[0]);
     const Eigen::Vector3d sigma =
         refined ? result.StdDev() : Eigen::Vector3d::Zero();
-    sx.push_back(sigma.x());
-    sy.push_back(sigma.y());
-    sz.push_back(sigma.z());
+    attributes.sx.push_back(sigma.x());
+    attributes.sy.push_back(sigma.y());
+    attributes.sz.push_back(sigma.z());
     const Eigen::Vector3d normal = point.normal.cast<double>();
-    s_normal.push_back(
+    attributes.s_normal.push_back(
         refined
             ? std::sqrt(std::max(0.0, normal.dot(result.covariance * normal)))
             : 0.0);
@@ -459,10 +458,10 @@ PointCloud DenseReconstructMultiView(
     } else {
       for (int v : point.views) seen.push_back(masters[matched[v]].master);
     }
-    num_images.push_back(static_cast<double>(seen.size()));
-    master_ids.push_back(masters[m].master);
-    sigma0.push_back(refined ? result.sigma0 : 0.0);
-    correlation.push_back(
+    attributes.num_images.push_back(static_cast<double>(seen.size()));
+    attributes.master_ids.push_back(masters[m].master);
+    attributes.sigma0.push_back(refined ? result.sigma0 : 0.0);
+    attributes.correlation.push_back(
         refined
             ? std::accumulate(
                   result.correlation.begin(), result.correlation.end(), 0.0) /
@@ -481,19 +480,7 @@ PointCloud DenseReconstructMultiView(
     }
     if (visibility != nullptr) visibility->push_back(std::move(seen));
   }
-  cloud.AddAttribute("sx", PlyScalarType::kFloat).values = std::move(sx);
-  cloud.AddAttribute("sy", PlyScalarType::kFloat).values = std::move(sy);
-  cloud.AddAttribute("sz", PlyScalarType::kFloat).values = std::move(sz);
-  cloud.AddAttribute("s_normal", PlyScalarType::kFloat).values =
-      std::move(s_normal);
-  cloud.AddAttribute("num_images", PlyScalarType::kUChar).values =
-      std::move(num_images);
-  cloud.AddAttribute("master_id", PlyScalarType::kInt).values =
-      std::move(master_ids);
-  cloud.AddAttribute("sigma0", PlyScalarType::kFloat).values =
-      std::move(sigma0);
-  cloud.AddAttribute("correlation", PlyScalarType::kFloat).values =
-      std::move(correlation);
+  attributes.MoveInto(&cloud);
   for (size_t j = 0; j < matched.size(); ++j) {
     DenseMasterReport& entry = report->masters[matched[j]];
     for (int r = 0; r < entry.reasons.rows * entry.reasons.cols; ++r) {
