@@ -99,11 +99,11 @@ int RunDense(int argc, char** argv) {
                  "factor to this longer side at most, px");
   app.add_option("--num_source_views",
                  options.num_source_views,
-                 "multiview: source views per master (most shared sparse "
-                 "points)");
+                 "multiview: source views per master (smallest angle at "
+                 "what it looks at, from --min_triangulation_angle_deg)");
   app.add_option("--min_triangulation_angle_deg",
                  options.min_triangulation_angle_deg,
-                 "multiview: a source shares points at this angle at least");
+                 "multiview: smallest angle between master and source rays");
   app.add_option("--patch_match_window_radius",
                  options.patch_match.window_radius,
                  "multiview: correlation window radius, depth-map px");
@@ -113,15 +113,20 @@ int RunDense(int argc, char** argv) {
   app.add_option("--patch_match_iterations",
                  options.patch_match.num_iterations,
                  "multiview: red-black propagation iterations");
+  app.add_option("--patch_match_candidates",
+                 options.patch_match.num_propagation_candidates,
+                 "multiview: neighbours' planes scored per pixel (the "
+                 "best-matched of 8)");
   app.add_option("--patch_match_best_views",
                  options.patch_match.best_views,
                  "multiview: a plane's cost over its best n views");
   app.add_option("--min_consistent_views",
                  options.fusion.min_consistent_views,
                  "multiview: other depth maps that must agree with a pixel");
-  app.add_option("--max_depth_error",
-                 options.fusion.max_depth_error,
-                 "multiview: agreement in depth, share of the depth");
+  app.add_option("--max_depth_error_px",
+                 options.fusion.max_depth_error_px,
+                 "multiview: agreement in depth, pixel footprints (depth / "
+                 "focal length) of the depth map compared with");
   app.add_option("--max_normal_error_deg",
                  options.fusion.max_normal_error_deg,
                  "multiview: agreement in normal, degrees");
@@ -204,6 +209,13 @@ int RunDense(int argc, char** argv) {
                  "Approximations: score of the best n views (0 = all)");
   app.add_option(
       "--patch_radius", options.mpgc.lsm.patch_radius, "MPGC patch radius, px");
+  app.add_option("--min_template_stddev",
+                 options.mpgc.lsm.min_template_stddev,
+                 "paper: MPGC matches master patches with this contrast at "
+                 "least (flat_patch), grey values");
+  app.add_option("--refine_min_template_stddev",
+                 options.refine_min_template_stddev,
+                 "multiview: the same for the refinement of fused points");
   app.add_option("--min_correlation",
                  options.mpgc.min_correlation,
                  "MPGC: search patches correlating less are dropped");

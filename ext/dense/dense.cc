@@ -63,6 +63,10 @@ void DenseOptions::Check() const {
       "--min_triangulation_angle_deg",
       "in [0, 90)",
       min_triangulation_angle_deg);
+  CheckOption(refine_min_template_stddev >= 0,
+              "--refine_min_template_stddev",
+              ">= 0",
+              refine_min_template_stddev);
   CheckOption(max_refine_shift_gsd > 0,
               "--max_refine_shift_gsd",
               "> 0",
@@ -1262,10 +1266,10 @@ PointCloud DenseReconstruct(const Scene& scene,
       attributes.num_images.push_back(1 + result.views.size());
       attributes.master_ids.push_back(selection.master);
       attributes.sigma0.push_back(result.sigma0);
-      attributes.correlation.push_back(std::accumulate(result.correlation.begin(),
-                                            result.correlation.end(),
-                                            0.0) /
-                            std::max<size_t>(1, result.correlation.size()));
+      attributes.correlation.push_back(
+          std::accumulate(
+              result.correlation.begin(), result.correlation.end(), 0.0) /
+          std::max<size_t>(1, result.correlation.size()));
       sigmas.push_back(cell.sigma_gsd);
       std::vector<image_t>& images_of_point = seen.emplace_back();
       images_of_point.push_back(selection.master);

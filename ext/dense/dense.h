@@ -4,10 +4,10 @@
 // multi-photo geometrically constrained matching (MPGC, mpgc.h). Two modes:
 //
 // multiview (the default; DenseReconstructMultiView):
-// 1. Every photograph a master; its source views are the images that share
-//    most sparse points with it seen at a triangulation angle of at least
-//    min_triangulation_angle_deg (by viewing direction where the model has
-//    no tracks).
+// 1. Every photograph a master; its source views are the images that see
+//    the point it looks at (on its principal ray, in the middle of its
+//    depth range) at the smallest angle between the rays that is still
+//    min_triangulation_angle_deg (on a ring: the neighbours on both sides).
 // 2. Per master, a depth and a normal for every pixel of the photograph
 //    shrunk to max_image_size (patch_match.h), streamed: each photograph is
 //    read once and kept at the working size only.
@@ -85,9 +85,9 @@ struct DenseOptions {
 
   // multiview: the depth maps' size (the photographs shrunk by the smallest
   // whole factor that brings the longer side to this at most), source views
-  // per master, and the smallest triangulation angle of a shared sparse
-  // point that makes an image a source.
-  int max_image_size = 1600;
+  // per master, and the smallest angle between the rays of master and
+  // source to the point the master looks at.
+  int max_image_size = 1200;
   int num_source_views = 4;
   double min_triangulation_angle_deg = 3;
   PatchMatchOptions patch_match;
@@ -98,6 +98,12 @@ struct DenseOptions {
   // A refined point further along its master ray from the fused one than
   // this many GSDs of the depth map is rejected (off_surface).
   double max_refine_shift_gsd = 2.0;
+  // The smallest contrast (grey values) of a master patch MPGC refines
+  // (flat_patch below it). Lower than the paper's 2 (mpgc.lsm): a fused
+  // point has already been matched over a wider window, and the precision
+  // test (max_sigma_gsd) judges what the patch's texture determines; on
+  // fountain-P11 2 left 28 % of the fused points flat, 1 leaves 6 %.
+  double refine_min_template_stddev = 1.0;
 
   // paper: search images per master (nearest viewing directions).
   int num_search_images = 6;
@@ -267,9 +273,11 @@ PointCloud DenseReconstruct(const Scene& scene,
                             DenseReport* report,
                             std::vector<std::vector<image_t>>* visibility);
 
-// multiview: every image (or the named ones) a master, with its source
-// views (MasterSelection::search) by shared sparse points; InputError as
-// SelectMasters.
+// multiview: every image (or the named ones, or num_masters spread as
+// SelectMasters spreads them) a master, with its source views
+// (MasterSelection::search): by the angle at the point the master looks
+// at, or by viewing direction where its depth range is unknown; InputError
+// as SelectMasters.
 std::vector<MasterSelection> SelectMultiViewMasters(
     const Scene& scene, const DenseOptions& options);
 

@@ -2,6 +2,7 @@
 //
 // `bayon dense` in its default mode: depth maps for every photograph, fused,
 // then MPGC for every point (dense.h).
+#include "ext/adjustment/triangulation.h"
 #include "ext/core/errors.h"
 #include "ext/core/parallel.h"
 #include "ext/core/progress.h"
@@ -63,55 +64,66 @@ std::vector<MasterSelection> SelectMultiViewMasters(
       masters.push_back(image->image_id);
     }
   }
-  // Per pair of images, the shared sparse points seen at a good angle.
-  std::map<std::pair<image_t, image_t>, int> shared;
-  for (const auto& [id, point] : scene.points3D) {
-    for (size_t a = 0; a < point.track.size(); ++a) {
-      const Image& first = scene.images.at(point.track[a].image_id);
-      const Eigen::Vector3d ray_a = point.xyz - first.cam_from_world.Center();
-      for (size_t b = a + 1; b < point.track.size(); ++b) {
-        const Image& second = scene.images.at(point.track[b].image_id);
-        if (first.image_id == second.image_id) continue;
-        const double angle =
-            AngleDeg(ray_a, point.xyz - second.cam_from_world.Center());
-        if (angle < options.min_triangulation_angle_deg ||
-            angle > options.max_search_angle_deg) {
-          continue;
-        }
-        ++shared[{first.image_id, second.image_id}];
-        ++shared[{second.image_id, first.image_id}];
+  // The images nearest in viewing direction (the paper's mode's choice):
+  // the fallback where a master's depth range is unknown.
+  DenseOptions by_direction = options;
+  by_direction.master_names.clear();
+  for (image_t id : masters) {
+    by_direction.master_names.push_back(scene.images.at(id).name);
+  }
+  by_direction.num_search_images = options.num_source_views;
+  std::vector<MasterSelection> selections = SelectMasters(scene, by_direction);
+  for (MasterSelection& selection : selections) {
+    const Image& master = scene.images.at(selection.master);
+    const Camera& camera = scene.cameras.at(master.camera_id);
+    // The point the master looks at: on its principal ray, in the middle
+    // of its depth range.
+    std::optional<Ray> axis =
+        RayThroughPixel(camera,
+                        master.cam_from_world,
+                        camera.PrincipalPointPx(),
+                        master.frame ? &*master.frame : nullptr);
+    std::pair<double, double> range;
+    try {
+      range = MasterDepthRange(scene, master, options);
+    } catch (const InputError&) {
+      continue;  // refused later, with the reason, if it is matched
+    }
+    if (!axis) continue;
+    const Eigen::Vector3d target =
+        axis->origin +
+        axis->direction * 0.5 * (range.first + range.second) /
+            axis->direction.dot(master.cam_from_world.rotation.inverse() *
+                                Eigen::Vector3d::UnitZ());
+    // Sources: the images that see that point, at the smallest angle
+    // between the rays to it that still gives depth (baseline and angle);
+    // the point inside the source photograph is the overlap.
+    std::vector<std::pair<double, image_t>> by_angle;
+    for (const auto& [id, image] : scene.images) {
+      if (id == master.image_id) continue;
+      const Camera& other = scene.cameras.at(image.camera_id);
+      Eigen::Vector2d xy;
+      if ((image.cam_from_world * target).z() <= 0 ||
+          !scene.Project(image, target, &xy) || xy.x() < 0 || xy.y() < 0 ||
+          xy.x() > other.width || xy.y() > other.height) {
+        continue;
+      }
+      const double angle = AngleDeg(target - master.cam_from_world.Center(),
+                                    target - image.cam_from_world.Center());
+      if (angle >= options.min_triangulation_angle_deg &&
+          angle <= options.max_search_angle_deg) {
+        by_angle.push_back({angle, id});
       }
     }
-  }
-  std::vector<MasterSelection> selections;
-  for (image_t master : masters) {
-    MasterSelection selection;
-    selection.master = master;
-    std::vector<std::pair<int, image_t>> by_shared;
-    for (const auto& [id, image] : scene.images) {
-      const auto it = shared.find({master, id});
-      if (it != shared.end()) by_shared.push_back({-it->second, id});
-    }
-    std::sort(by_shared.begin(), by_shared.end());
-    for (const auto& [count, id] : by_shared) {
+    std::sort(by_angle.begin(), by_angle.end());
+    selection.search.clear();
+    for (const auto& [angle, id] : by_angle) {
       if (static_cast<int>(selection.search.size()) >=
           options.num_source_views) {
         break;
       }
       selection.search.push_back(id);
     }
-    selections.push_back(std::move(selection));
-  }
-  // Without tracks (a model of poses only): the nearest viewing directions,
-  // as the paper's mode chooses its search images.
-  if (scene.points3D.empty()) {
-    DenseOptions by_direction = options;
-    by_direction.master_names.clear();
-    for (image_t id : masters) {
-      by_direction.master_names.push_back(scene.images.at(id).name);
-    }
-    by_direction.num_search_images = options.num_source_views;
-    return SelectMasters(scene, by_direction);
   }
   return selections;
 }
@@ -177,9 +189,13 @@ PointCloud DenseReconstructMultiView(
     MasterState& state = states[m];
     const MasterSelection& selection = masters[m];
     if (selection.search.empty()) {
-      state.skipped =
-          "no other image shares sparse points with it at a triangulation "
-          "angle of --min_triangulation_angle_deg or more";
+      state.skipped = StrCat(
+          "no other image sees what it looks at from between "
+          "--min_triangulation_angle_deg and --max_search_angle_deg (",
+          options.min_triangulation_angle_deg,
+          " to ",
+          options.max_search_angle_deg,
+          " deg) away");
     } else if (views.count(selection.master) == 0) {
       state.skipped = "its image could not be read";
     } else {
@@ -296,6 +312,7 @@ PointCloud DenseReconstructMultiView(
     // MPGC keeps it with as many search images.
     MpgcOptions mpgc = options.mpgc;
     mpgc.min_search_views = std::max(1, options.fusion.min_consistent_views);
+    mpgc.lsm.min_template_stddev = options.refine_min_template_stddev;
     // The full-size photographs of one master's points at a time; those
     // the next master needs as well stay.
     std::map<image_t, cv::Mat> resident;

@@ -12,7 +12,10 @@ void FusionOptions::Check() const {
               "--min_consistent_views",
               ">= 0",
               min_consistent_views);
-  CheckOption(max_depth_error > 0, "--max_depth_error", "> 0", max_depth_error);
+  CheckOption(max_depth_error_px > 0,
+              "--max_depth_error_px",
+              "> 0",
+              max_depth_error_px);
   CheckOption(max_normal_error_deg > 0 && max_normal_error_deg <= 180,
               "--max_normal_error_deg",
               "in (0, 180]",
@@ -65,7 +68,7 @@ std::vector<FusedPoint> FuseDepthMaps(
     (*verdicts)[i].assign(maps[i]->depth.size(), FusionVerdict::kNone);
   }
   const float max_cost = static_cast<float>(options.max_cost);
-  const float max_error = static_cast<float>(options.max_depth_error);
+  const float max_error = static_cast<float>(options.max_depth_error_px);
   const float min_cos =
       static_cast<float>(std::cos(options.max_normal_error_deg * M_PI / 180));
   const auto usable = [&](int i, size_t q) {
@@ -107,7 +110,17 @@ std::vector<FusedPoint> FuseDepthMaps(
           const size_t q =
               maps[j]->index(static_cast<int>(u), static_cast<int>(v));
           if (!usable(j, q)) continue;
-          if (std::abs(maps[j]->depth[q] - in_j.z()) > max_error * in_j.z()) {
+          // A pixel's footprint along the depth grows with the slant of
+          // the surface to the ray (by tan of the angle between them, up to
+          // 80 degrees): the agreement a slanted wall or a ledge seen at a
+          // grazing angle can show.
+          const float cos_slant = std::max(
+              0.17f,
+              std::abs(normal.dot(in_j.normalized().transpose() * other.R_cw)));
+          const float slant =
+              1 + std::sqrt(1 - cos_slant * cos_slant) / cos_slant;
+          if (std::abs(maps[j]->depth[q] - in_j.z()) >
+              max_error * slant * in_j.z() / other.K(0, 0)) {
             continue;
           }
           if ((other.R_wc * maps[j]->normal[q]).dot(normal) < min_cos) continue;

@@ -4,7 +4,10 @@
 // becomes a point when its plane was matched well (cost at most max_cost)
 // and the depth maps of at least min_consistent_views other masters agree
 // with it: the point projects into them onto a pixel whose depth is the
-// point's within max_depth_error (relative) and whose normal is within
+// point's within max_depth_error_px footprints of that depth map's pixel
+// at that depth (depth / focal length, times 1 + tan of the surface's slant
+// to the ray: the same agreement at any image size and on a ledge seen at
+// a grazing angle) and whose normal is within
 // max_normal_error_deg of its own. The pixel and those that agree and are
 // not yet part of a point become one point, the mean of their object
 // points, so that each surface element gives one point however many
@@ -23,7 +26,7 @@ namespace bayon {
 
 struct FusionOptions {
   int min_consistent_views = 2;
-  double max_depth_error = 0.01;
+  double max_depth_error_px = 2.0;
   double max_normal_error_deg = 30;
   double max_cost = 0.6;
   void Check() const;  // throws InputError naming field, value, rule

@@ -21,6 +21,11 @@ void PatchMatchOptions::Check() const {
               window_step);
   CheckOption(num_iterations >= 1, "--num_iterations", ">= 1", num_iterations);
   CheckOption(best_views >= 1, "--best_views", ">= 1", best_views);
+  CheckOption(
+      num_propagation_candidates >= 1 && num_propagation_candidates <= 8,
+      "--patch_match_candidates",
+      "in [1, 8]",
+      num_propagation_candidates);
   CheckOption(min_texture >= 0, "--min_texture", ">= 0", min_texture);
   CheckOption(max_normal_angle_deg > 0 && max_normal_angle_deg < 90,
               "--max_normal_angle_deg",
@@ -417,16 +422,30 @@ DepthMap EstimateDepthMap(const PinholeView& master,
               cost = c;
             }
           };
-          for (const auto& [dx, dy] : kNeighbours) {
-            const int qx = x + dx, qy = y + dy;
+          // The neighbours' planes where this pixel's ray meets them, the
+          // best-matched neighbours first (their own costs rank them); the
+          // plane this pixel has already is not scored again.
+          std::array<std::pair<float, int>, kNeighbours.size()> ranked;
+          int num_ranked = 0;
+          for (int k = 0; k < static_cast<int>(kNeighbours.size()); ++k) {
+            const int qx = x + kNeighbours[k][0], qy = y + kNeighbours[k][1];
             if (qx < border || qy < border || qx >= x_end || qy >= y_end) {
               continue;
             }
             const size_t q = map.index(qx, qy);
             if (!textured[q] || map.cost[q] >= kInvalidCost) continue;
+            ranked[num_ranked++] = {map.cost[q], k};
+          }
+          const int num_tried =
+              std::min(num_ranked, options.num_propagation_candidates);
+          std::partial_sort(ranked.begin(),
+                            ranked.begin() + num_tried,
+                            ranked.begin() + num_ranked);
+          for (int c = 0; c < num_tried; ++c) {
+            const int k = ranked[c].second;
+            const int qx = x + kNeighbours[k][0], qy = y + kNeighbours[k][1];
+            const size_t q = map.index(qx, qy);
             const Eigen::Vector3f& n = map.normal[q];
-            // The neighbour's plane where this pixel's ray meets it; the
-            // plane this pixel has already is not scored again.
             const float along = n.dot(ray);
             if (along >= 0) continue;
             const float d = map.depth[q] * n.dot(matcher.Ray(qx, qy)) / along;

@@ -12,7 +12,8 @@
 // that point's depth). Then, in alternate half-sweeps over the pixels of a
 // checkerboard's two colours, each pixel takes the best of
 //   - the planes of eight neighbours of the other colour (at one and at
-//     five pixels along the rows and columns), and
+//     five pixels along the rows and columns; of those the best-matched
+//     num_propagation_candidates), and
 //   - perturbations of its own plane (depth and normal, shrinking with each
 //     iteration).
 // A plane is scored by normalised cross-correlation of the master's window
@@ -64,6 +65,9 @@ struct PatchMatchOptions {
   int window_step = 2;
   // Red-black iterations (each: both colours once).
   int num_iterations = 4;
+  // Of the eight neighbours' planes, those of the best-matched this many
+  // are scored at a pixel (ranked by their cost at their own pixels).
+  int num_propagation_candidates = 4;
   // The score is the mean cost (1 - NCC) of the best this many views.
   int best_views = 2;
   // Master windows with a smaller standard deviation of their grey values

@@ -79,6 +79,7 @@ dense() {
 evaluate() {
   "$BAYON" evaluate --ground_truth_path "$2" \
     --cloud_path "$dir/$1/dense/points.ply" --completeness_threshold_gsd 5 \
+    --cloud_errors_path "$dir/$1/errors.ply" \
     --output_path "$dir/$1/evaluation.json" >"$dir/$1/evaluate.log" 2>&1 ||
     { cat "$dir/$1/evaluate.log" >&2; exit 1; }
 }
@@ -99,11 +100,11 @@ dense temple "$BAYON_DATA_DIR/temple-ring" "$chain_dir/temple/adjusted"
 dense fountain "$BAYON_DATA_DIR/fountain-P11/images" \
   "$chain_dir/fountain/adjusted"
 
-printf '\n%-9s %9s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s %6s %6s %6s\n' set cells \
+printf '\n%-9s %9s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s %6s %6s %6s %7s\n' set cells \
   points time "cells/s" "points/s" peak "acc med" "acc RMS" "acc p95" complete \
-  walls tops depth fusion MPGC
-printf '%-9s %9s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s %6s %6s %6s\n' "" "" "" s "" "" \
-  MB GSD GSD GSD "5 GSD" "5 GSD" "5 GSD" s s s
+  walls tops depth fusion MPGC "err/sig"
+printf '%-9s %9s %8s %8s %8s %9s %9s %7s %9s %9s %9s %7s %7s %6s %6s %6s %7s\n' "" "" "" s "" "" \
+  MB GSD GSD GSD "5 GSD" "5 GSD" "5 GSD" s s s ""
 for name in tower paper one_light temple fountain; do
   read -r cells points split < <(python3 -c '
 import json, sys
@@ -127,19 +128,28 @@ print("%.2f %.2f %.2f %.1f%% %.1f%% %.1f%%" % (
     100 * o["walls"]["completeness_fraction"],
     100 * o["tops"]["completeness_fraction"]))' \
       "$dir/$name/evaluation.json")
+    gsd=$(python3 -c 'import json, sys
+print(json.load(open(sys.argv[1]))["cloud"]["gsd_m"])' "$dir/$name/evaluation.json")
+    read -r ratio _ < <(python3 "$(dirname "$0")/lib/sigma_ratio.py" \
+      "$dir/$name/errors.ply" "$gsd")
+  else
+    ratio="-"
   fi
   read -r med rms p95 complete walls tops <<<"$accuracy"
   read -r t_depth t_fusion t_mpgc <<<"$split"
   awk -v n="$name" -v c="$cells" -v p="$points" -v t="$t" -v m="$m" \
     -v a="$med" -v r="$rms" -v q="$p95" -v k="$complete" -v w="$walls" \
-    -v u="$tops" -v d="$t_depth" -v f="$t_fusion" -v g="$t_mpgc" 'BEGIN {
-      printf "%-9s %9d %8d %8.1f %8.0f %9.0f %9d %7s %9s %9s %9s %7s %7s %6s %6s %6s\n",
-        n, c, p, t, c / t, p / t, m, a, r, q, k, w, u, d, f, g }'
+    -v u="$tops" -v d="$t_depth" -v f="$t_fusion" -v g="$t_mpgc" \
+    -v e="$ratio" 'BEGIN {
+      printf "%-9s %9d %8d %8.1f %8.0f %9.0f %9d %7s %9s %9s %9s %7s %7s %6s %6s %6s %7s\n",
+        n, c, p, t, c / t, p / t, m, a, r, q, k, w, u, d, f, g, e }'
 done
 echo
 echo "cells: multiview, the depth maps' pixels (every photograph a master);"
 echo "paper, the dense pattern's 7-pixel cells of 5 masters; points: those"
-echo "accepted. depth, fusion, MPGC: multiview's time split (s)."
+echo "accepted. depth, fusion, MPGC: multiview's time split (s). err/sig: the"
+echo "points' true errors against their stated sigmas along the normal (median"
+echo "|error| / s_normal / 0.6745 over the points within 5 GSD; 1 = as stated)."
 echo "tower, paper: true orientation with triangulated tie points; one_light: the"
 echo "same tower photographed in one light (synth --one_light 1); temple, fountain:"
 echo "bayon's own orientation (chain.sh)."
