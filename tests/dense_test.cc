@@ -65,8 +65,6 @@ std::string CopyOfTower(const std::string& name) {
 
 std::vector<std::string> DenseArgs(const std::string& ws) {
   return {"dense",
-          "--mode",
-          "paper",
           "--workspace_path",
           ws,
           "--input_path",
@@ -78,7 +76,9 @@ std::vector<std::string> DenseArgs(const std::string& ws) {
           "--max_depth",
           "20",
           "--num_threads",
-          "2"};
+          "2",
+          "--mode",
+          "paper"};
 }
 
 TEST(DenseCommand, TowerAgainstTheTrueSurface) {
@@ -342,9 +342,11 @@ void ExpectRefused(const std::string& ws,
   EXPECT_FALSE(fs::exists(ws + "/dense/points.ply"));
 }
 
-TEST(DenseCommand, RefusesBadInput) {
-  const std::string ws = CopyOfTower("dense_tower_bad");
+// Both modes refuse alike.
+void ExpectBadInputRefused(const std::string& mode) {
+  const std::string ws = CopyOfTower("dense_tower_bad_" + mode);
   std::vector<std::string> args = DenseArgs(ws);
+  args.back() = mode;
 
   std::vector<std::string> missing = args;
   missing[4] = ws + "/no_model";
@@ -375,6 +377,7 @@ TEST(DenseCommand, RefusesBadInput) {
   }
   std::vector<std::string> bare(args.begin(), args.begin() + 7);
   bare[4] = ws + "/bare";
+  bare.insert(bare.end(), {"--mode", mode});
   ExpectRefused(ws, bare, "--min_depth");
 
   // A model without calibration: a camera with no focal length, and no
@@ -414,6 +417,11 @@ TEST(DenseCommand, RefusesBadInput) {
   std::string content;
   std::getline(kept, content);
   EXPECT_EQ(content, "mine");
+}
+
+TEST(DenseCommand, RefusesBadInput) {
+  ExpectBadInputRefused("paper");
+  ExpectBadInputRefused("multiview");
 }
 
 // What is missing costs only its own part: a search photograph that is not

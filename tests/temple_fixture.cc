@@ -92,6 +92,10 @@ TempleSetup TempleConfigFixture() {
             << CommaSeparated(params)
             << "\n[match]\npairing = exhaustive\n"
                "[adjust]\ndatum = free\nself_calibration = significant\n"
+               // Depth maps at half size (320 x 240): the multiview
+               // path of the demo at a quarter of its work (the demo's own
+               // figures: scripts/bench.sh dense).
+               "[dense]\nmax_image_size = 320\n"
                "[mesh]\nmethod = poisson\n"
                "[render]\nnum_views = 2\nsupersampling = 2\nwidth = 480\n"
                "height = 360\nstereo = anaglyph\n";

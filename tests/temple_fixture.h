@@ -22,7 +22,8 @@ struct TempleSetup {
   std::string truth;  // the calibrated cameras, a COLMAP text model
   // A config to read after configs/ring.ini: the calibrated camera, every
   // pair matched, a free network with the significant additional
-  // parameters, a Poisson mesh and two small renders.
+  // parameters, depth maps at half size, a Poisson mesh and two small
+  // renders.
   std::string config;
 };
 TempleSetup TempleConfigFixture();
