@@ -286,26 +286,33 @@ PointCloud DenseReconstructMultiView(
   for (MasterState& state : states) state.map = DepthMap();
 
   // 4. MPGC at full size, master by master (the fused points are in master
-  //    order), over the master's sources that confirmed each point.
+  //    order), over the master's sources.
   stage_timer = Timer();
   std::vector<DenseReject> verdict_of(fused.size(), DenseReject::kAccepted);
   std::vector<MpgcResult> results(fused.size());
   std::vector<std::vector<image_t>> search_of(fused.size());
   for (size_t k = 0; k < fused.size(); ++k) {
-    // The masters that confirmed the point, the master's sources first (most
-    // shared points), num_source_views at most.
-    const std::vector<image_t>& sources =
-        masters[matched[fused[k].master]].search;
-    std::vector<image_t> confirmed;
-    for (int v : fused[k].views)
-      confirmed.push_back(masters[matched[v]].master);
-    std::stable_partition(confirmed.begin(), confirmed.end(), [&](image_t id) {
-      return std::find(sources.begin(), sources.end(), id) != sources.end();
-    });
-    if (static_cast<int>(confirmed.size()) > options.num_source_views) {
-      confirmed.resize(options.num_source_views);
+    // MPGC's search images: the master's sources that confirmed the point,
+    // then its other sources (MPGC drops a view where the point is hidden),
+    // then other masters that confirmed it; num_source_views at most.
+    const std::vector<int>& sources = states[matched[fused[k].master]].sources;
+    const auto is_source = [&](image_t id) {
+      return std::find(sources.begin(), sources.end(), static_cast<int>(id)) !=
+             sources.end();
+    };
+    std::vector<image_t>& search = search_of[k];
+    const auto add = [&](image_t id) {
+      if (static_cast<int>(search.size()) < options.num_source_views &&
+          std::find(search.begin(), search.end(), id) == search.end()) {
+        search.push_back(id);
+      }
+    };
+    for (int v : fused[k].views) {
+      if (is_source(masters[matched[v]].master))
+        add(masters[matched[v]].master);
     }
-    search_of[k] = std::move(confirmed);
+    for (int id : sources) add(static_cast<image_t>(id));
+    for (int v : fused[k].views) add(masters[matched[v]].master);
   }
   if (options.refine) {
     // A fused point was confirmed by min_consistent_views other masters;

@@ -133,12 +133,16 @@ DenseOptions PlaneOptions() {
 
 TEST(DenseMultiView, PlaneAgreesWithTheTruthAndItsStandardDeviations) {
   const PlaneOnDisk disk("bayon_dense_multi_view");
-  const DenseOptions options = PlaneOptions();
+  // Three of the five photographs as masters (a point needs the other two
+  // to agree), each with all four others as sources: the sanitizer lane's
+  // time in bounds.
+  DenseOptions options = PlaneOptions();
+  options.master_names = {"image_1.png", "image_2.png", "image_4.png"};
   const std::vector<MasterSelection> masters =
       SelectMultiViewMasters(disk.scene(), options);
-  ASSERT_EQ(masters.size(), 5u);
+  ASSERT_EQ(masters.size(), 3u);
   for (const MasterSelection& master : masters) {
-    EXPECT_EQ(master.search.size(), 4u);  // every other image shares points
+    EXPECT_EQ(master.search.size(), 4u);  // every other image sees it
   }
   DenseReport report;
   std::vector<std::vector<image_t>> visibility;
