@@ -286,33 +286,26 @@ PointCloud DenseReconstructMultiView(
   for (MasterState& state : states) state.map = DepthMap();
 
   // 4. MPGC at full size, master by master (the fused points are in master
-  //    order), over the master's sources.
+  //    order), over the masters that confirmed each point.
   stage_timer = Timer();
   std::vector<DenseReject> verdict_of(fused.size(), DenseReject::kAccepted);
   std::vector<MpgcResult> results(fused.size());
   std::vector<std::vector<image_t>> search_of(fused.size());
   for (size_t k = 0; k < fused.size(); ++k) {
-    // MPGC's search images: the master's sources that confirmed the point,
-    // then its other sources (MPGC drops a view where the point is hidden),
-    // then other masters that confirmed it; num_source_views at most.
+    // MPGC's search images: the masters that confirmed the point, the
+    // master's sources first; num_source_views at most. (All the master's
+    // sources instead: on the tower completeness 67.3 -> 70.9 %, but MPGC
+    // twice as long.)
     const std::vector<int>& sources = states[matched[fused[k].master]].sources;
-    const auto is_source = [&](image_t id) {
+    std::vector<image_t>& search = search_of[k];
+    for (int v : fused[k].views) search.push_back(masters[matched[v]].master);
+    std::stable_partition(search.begin(), search.end(), [&](image_t id) {
       return std::find(sources.begin(), sources.end(), static_cast<int>(id)) !=
              sources.end();
-    };
-    std::vector<image_t>& search = search_of[k];
-    const auto add = [&](image_t id) {
-      if (static_cast<int>(search.size()) < options.num_source_views &&
-          std::find(search.begin(), search.end(), id) == search.end()) {
-        search.push_back(id);
-      }
-    };
-    for (int v : fused[k].views) {
-      if (is_source(masters[matched[v]].master))
-        add(masters[matched[v]].master);
+    });
+    if (static_cast<int>(search.size()) > options.num_source_views) {
+      search.resize(options.num_source_views);
     }
-    for (int id : sources) add(static_cast<image_t>(id));
-    for (int v : fused[k].views) add(masters[matched[v]].master);
   }
   if (options.refine) {
     // A fused point was confirmed by min_consistent_views other masters;
