@@ -14,8 +14,9 @@
 // 3. The depth maps fused (fusion.h): a pixel whose depth and normal enough
 //    other masters confirm becomes one point with them.
 // 4. MPGC at full resolution for every fused point, from its position and
-//    normal, over the master and the source views that confirmed it; X, Y, Z
-//    with their covariance, and the precision test below.
+//    normal, over the master and the masters that confirmed it (its source
+//    views first); X, Y, Z with their covariance, the precision test below
+//    and a test of how far MPGC moved it (max_refine_shift_gsd).
 //
 // paper (--mode paper): the paper's section 3.3 from a few master images:
 //
