@@ -348,8 +348,7 @@ int RunDense(int argc, char** argv) {
     if (!master.skipped.empty()) continue;
     const cv::Mat color =
         paper ? images.at(master.master).color
-              : LoadDenseImage(scene, master.master, in.image_path, 0, true)
-                    .color;
+              : LoadDenseColor(scene, master.master, in.image_path);
     WriteImage(
         (rejects_folder / fs::path(master.name).stem()).string() + ".png",
         RejectMap(master, color));

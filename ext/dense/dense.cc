@@ -212,10 +212,6 @@ Eigen::Vector3d ObjectCentre(const Scene& scene) {
   return *centre;
 }
 
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI;
-}
-
 }  // namespace
 
 std::vector<MasterSelection> SelectMasters(const Scene& scene,
@@ -263,7 +259,8 @@ std::vector<MasterSelection> SelectMasters(const Scene& scene,
       int farthest = -1;
       for (int i = 0; i < n; ++i) {
         nearest[i] = std::min(
-            nearest[i], AngleDeg(directions[i], directions[masters.back()]));
+            nearest[i],
+            AngleBetweenDeg(directions[i], directions[masters.back()]));
         if (nearest[i] > 0 &&
             (farthest < 0 || nearest[i] > nearest[farthest])) {
           farthest = i;
@@ -280,7 +277,7 @@ std::vector<MasterSelection> SelectMasters(const Scene& scene,
     std::vector<std::pair<double, int>> by_angle;
     for (int i = 0; i < n; ++i) {
       if (i == m) continue;
-      const double angle = AngleDeg(directions[i], directions[m]);
+      const double angle = AngleBetweenDeg(directions[i], directions[m]);
       if (angle <= options.max_search_angle_deg) by_angle.push_back({angle, i});
     }
     std::sort(by_angle.begin(), by_angle.end());
@@ -340,6 +337,16 @@ DenseImage LoadDenseImage(const Scene& scene,
   return image;
 }
 
+double AngleBetweenDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI;
+}
+
+cv::Mat LoadDenseColor(const Scene& scene,
+                       image_t image_id,
+                       const std::string& image_path) {
+  return ReadColor8(image_path + "/" + scene.images.at(image_id).name);
+}
+
 std::map<image_t, DenseImage> LoadDenseImages(
     const Scene& scene,
     const std::vector<MasterSelection>& masters,
@@ -352,7 +359,7 @@ std::map<image_t, DenseImage> LoadDenseImages(
     if (image.gray.empty()) {
       image = LoadDenseImage(scene, id, image_path, highpass_sigma_px, color);
     } else if (color && image.color.empty()) {
-      image.color = ReadColor8(image_path + "/" + scene.images.at(id).name);
+      image.color = LoadDenseColor(scene, id, image_path);
     }
   };
   const auto load = [&](image_t id, bool color) {
@@ -1331,8 +1338,7 @@ void DensePointAttributes::MoveInto(PointCloud* cloud) {
 std::string DenseReport::Summary() const {
   std::ostringstream out;
   out.setf(std::ios::fixed);
-  // The multiview mode's cells are the depth maps' pixels.
-  const bool pixels = propagation_seconds > 0;
+  const bool pixels = mode == DenseMode::kMultiView;
   const char* cells = pixels ? " pixels" : " cells";
   std::array<size_t, static_cast<int>(DenseReject::kNumReasons)> rejects{};
   for (const DenseMasterReport& master : masters) {

@@ -226,6 +226,9 @@ struct DenseMasterReport {
 cv::Mat RejectMap(const DenseMasterReport& master, const cv::Mat& color);
 
 struct DenseReport {
+  // multiview: the cells are the depth maps' pixels, the search images the
+  // source views.
+  DenseMode mode = DenseMode::kPaper;
   std::vector<DenseMasterReport> masters;
   size_t num_points = 0;
   size_t num_cells = 0;
@@ -306,6 +309,15 @@ DenseImage LoadDenseImage(const Scene& scene,
                           const std::string& image_path,
                           double highpass_sigma_px,
                           bool color);
+
+// An image's colours (8-bit BGR) as the dense stages read them, for the
+// points and the reject pictures; InputError when it cannot be read.
+cv::Mat LoadDenseColor(const Scene& scene,
+                       image_t image_id,
+                       const std::string& image_path);
+
+// Angle between two directions, degrees.
+double AngleBetweenDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 
 // The MPGC status as a reject reason (kAccepted when converged).
 DenseReject DenseRejectOf(MpgcStatus status);

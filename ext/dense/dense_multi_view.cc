@@ -18,10 +18,6 @@
 namespace bayon {
 namespace {
 
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI;
-}
-
 // The smallest whole factor that brings the longer side to max_image_size.
 int Downscale(const Camera& camera, int max_image_size) {
   const int longer = static_cast<int>(std::max(camera.width, camera.height));
@@ -29,7 +25,7 @@ int Downscale(const Camera& camera, int max_image_size) {
 }
 
 struct MasterState {
-  std::vector<int> sources;  // indices into the masters
+  std::vector<image_t> sources;  // those that could be read
   std::string skipped;
   double min_depth = 0, max_depth = 0;
   DepthMap map;
@@ -108,8 +104,9 @@ std::vector<MasterSelection> SelectMultiViewMasters(
           xy.x() > other.width || xy.y() > other.height) {
         continue;
       }
-      const double angle = AngleDeg(target - master.cam_from_world.Center(),
-                                    target - image.cam_from_world.Center());
+      const double angle =
+          AngleBetweenDeg(target - master.cam_from_world.Center(),
+                          target - image.cam_from_world.Center());
       if (angle >= options.min_triangulation_angle_deg &&
           angle <= options.max_search_angle_deg) {
         by_angle.push_back({angle, id});
@@ -141,9 +138,8 @@ PointCloud DenseReconstructMultiView(
   DenseReport local_report;
   if (report == nullptr) report = &local_report;
   *report = DenseReport();
+  report->mode = DenseMode::kMultiView;
   const int num_masters = static_cast<int>(masters.size());
-  std::map<image_t, int> master_index;
-  for (int m = 0; m < num_masters; ++m) master_index[masters[m].master] = m;
 
   // 1. Every photograph once, kept at the depth maps' size (a source that
   //    is not itself a master as well).
@@ -200,7 +196,7 @@ PointCloud DenseReconstructMultiView(
       state.skipped = "its image could not be read";
     } else {
       for (image_t id : selection.search) {
-        if (views.count(id) > 0) state.sources.push_back(static_cast<int>(id));
+        if (views.count(id) > 0) state.sources.push_back(id);
       }
       if (state.sources.empty()) {
         state.skipped = "none of its source images could be read";
@@ -239,9 +235,7 @@ PointCloud DenseReconstructMultiView(
       const Image& master = scene.images.at(masters[m].master);
       const PinholeView& view = views.at(master.image_id);
       std::vector<const PinholeView*> sources;
-      for (int id : state.sources) {
-        sources.push_back(&views.at(static_cast<image_t>(id)));
-      }
+      for (image_t id : state.sources) sources.push_back(&views.at(id));
       // The sparse points the master sees start their pixels.
       std::vector<DepthSeed> seeds;
       for (const Point2D& point2D : master.points2D) {
@@ -296,12 +290,12 @@ PointCloud DenseReconstructMultiView(
     // master's sources first; num_source_views at most. (All the master's
     // sources instead: on the tower completeness 67.3 -> 70.9 %, but MPGC
     // twice as long.)
-    const std::vector<int>& sources = states[matched[fused[k].master]].sources;
+    const std::vector<image_t>& sources =
+        states[matched[fused[k].master]].sources;
     std::vector<image_t>& search = search_of[k];
     for (int v : fused[k].views) search.push_back(masters[matched[v]].master);
     std::stable_partition(search.begin(), search.end(), [&](image_t id) {
-      return std::find(sources.begin(), sources.end(), static_cast<int>(id)) !=
-             sources.end();
+      return std::find(sources.begin(), sources.end(), id) != sources.end();
     });
     if (static_cast<int>(search.size()) > options.num_source_views) {
       search.resize(options.num_source_views);
@@ -405,9 +399,7 @@ PointCloud DenseReconstructMultiView(
     entry.min_depth = states[m].min_depth;
     entry.max_depth = states[m].max_depth;
     entry.seconds = states[m].seconds;
-    for (int id : states[m].sources) {
-      entry.search.push_back(static_cast<image_t>(id));
-    }
+    entry.search = states[m].sources;
   }
   for (size_t j = 0; j < matched.size(); ++j) {
     DenseMasterReport& entry = report->masters[matched[j]];
