@@ -6,6 +6,7 @@
 #include "ext/colmap/database.h"
 #include "ext/colmap/model_io.h"
 #include "ext/colmap/table_tie_points.h"
+#include "ext/core/alignment.h"
 #include "ext/core/file_util.h"
 #include "ext/core/random.h"
 
@@ -213,6 +214,32 @@ TEST(Adjust, MinimumDatumAndFreeNetwork) {
   EXPECT_NEAR(free["statistics"]["sigma0_px"].get<double>(), 0.3, 0.03);
   const nlohmann::json& rms = free["statistics"]["point_precision_rms_mm"];
   for (int k = 0; k < 3; ++k) EXPECT_GT(rms[k].get<double>(), 0);
+
+  // Upright: z along the truth's vertical (within 5 degrees; the
+  // photographs, every other one portrait, are all that tells it), the
+  // origin at the object's centre, the scale of the relative orientation.
+  EXPECT_EQ(free["datum"]["vertical"],
+            "the images' horizontal axes (cameras held level)");
+  const Scene truth = ReadModel(ws + "/gt/sparse");
+  const Scene adjusted = ReadModel(dir + "/free");
+  std::vector<Eigen::Vector3d> true_centres, free_centres;
+  for (const auto& [id, image] : adjusted.images) {
+    free_centres.push_back(image.cam_from_world.Center());
+    const Image* same = truth.FindImageByName(image.name);
+    ASSERT_NE(same, nullptr) << image.name;
+    true_centres.push_back(same->cam_from_world.Center());
+  }
+  const std::optional<Sim3d> free_from_true =
+      EstimateSim3d(true_centres, free_centres);
+  ASSERT_TRUE(free_from_true);
+  const Eigen::Vector3d up =
+      free_from_true->rotation * Eigen::Vector3d::UnitZ();
+  EXPECT_LT(std::acos(up.z()) * 180 / M_PI, 5.0);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& [id, point] : adjusted.points3D) mean += point.xyz;
+  mean /= static_cast<double>(adjusted.points3D.size());
+  // The ring's radius is 6 m in the truth.
+  EXPECT_LT(mean.norm(), 0.1 * 6 * free_from_true->scale);
 }
 
 // bayon's own chain: strip (chained models, similarity to the control),

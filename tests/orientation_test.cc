@@ -16,6 +16,8 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -316,6 +318,26 @@ void BundleThroughBayonsChain(const std::string& db,
        "2"});
 }
 
+// How far the adjusted model's z is from the truth's vertical `truth_up`
+// (in the truth's frame), in degrees: per image, the angle between the two
+// as that camera sees them (the frames' similarity cancels), the mean.
+double UpErrorDeg(const Scene& adjusted,
+                  const Scene& truth,
+                  const Eigen::Vector3d& truth_up) {
+  double sum = 0;
+  int count = 0;
+  for (const auto& [id, image] : adjusted.images) {
+    const Image* same = truth.FindImageByName(image.name);
+    if (same == nullptr) continue;
+    const Eigen::Vector3d seen_true = same->cam_from_world.rotation * truth_up;
+    const Eigen::Vector3d seen_adjusted =
+        image.cam_from_world.rotation * Eigen::Vector3d::UnitZ();
+    sum += std::acos(std::clamp(seen_true.dot(seen_adjusted), -1.0, 1.0));
+    ++count;
+  }
+  return count == 0 ? 180 : sum / count * 180 / M_PI;
+}
+
 // bayon's own chain on the temple ring, free network: relative orientation,
 // disparity surfaces, least-squares tie points, strip (with resection),
 // bundle adjustment; the adjusted stations against the calibrated cameras
@@ -333,15 +355,24 @@ SparseEvaluation TempleThroughBayonsChain(const std::string& name,
        testing::DataPath("temple-ring/templeSR_par.txt"),
        "--output_path",
        dir + "/truth"});
-  const SparseEvaluation evaluation =
-      EvaluateSparse(ReadModel(dir + "/adjusted"), ReadModel(dir + "/truth"));
+  const Scene adjusted = ReadModel(dir + "/adjusted");
+  const Scene truth = ReadModel(dir + "/truth");
+  const SparseEvaluation evaluation = EvaluateSparse(adjusted, truth);
+  // Upright free network (issue 30): the Middlebury frame's vertical is +y,
+  // the axis of the gantry's ring (every photograph is portrait, half of
+  // them turned each way: the stations above the temple give the sign).
+  const double up_error_deg =
+      UpErrorDeg(adjusted, truth, Eigen::Vector3d::UnitY());
   std::printf(
       "temple, bayon's chain, free network, self-calibration %s: %d/16 "
-      "images, rotation RMS %.3f deg, centre RMS %.3f %% of the distance\n",
+      "images, rotation RMS %.3f deg, centre RMS %.3f %% of the distance, "
+      "z %.2f deg from the vertical\n",
       self_calibration.c_str(),
       evaluation.num_registered,
       evaluation.rotation_rms_deg,
-      100 * evaluation.center_rms_relative);
+      100 * evaluation.center_rms_relative,
+      up_error_deg);
+  EXPECT_LT(up_error_deg, 5.0);
   return evaluation;
 }
 
@@ -388,7 +419,14 @@ SparseEvaluation FountainThroughBayonsChain() {
       {"--pairing", "sequential", "--num_neighbors", "3"});
   Run({"relative", "--database_path", db, "--num_threads", "2"});
   BundleThroughBayonsChain(db, images, dir, "none");
-  return EvaluateSparse(ReadModel(dir + "/adjusted"), truth);
+  const Scene adjusted = ReadModel(dir + "/adjusted");
+  // Upright free network (issue 30): the Strecha frame's vertical is -z
+  // (the photographs' x axes lie within 1.2 degrees of its xy plane).
+  const double up_error_deg =
+      UpErrorDeg(adjusted, truth, -Eigen::Vector3d::UnitZ());
+  std::printf("fountain-P11: z %.2f deg from the vertical\n", up_error_deg);
+  EXPECT_LT(up_error_deg, 5.0);
+  return EvaluateSparse(adjusted, truth);
 }
 
 TEST(Orientation, FountainBundleThroughBayonsChain) {

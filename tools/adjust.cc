@@ -52,6 +52,11 @@ int RunAdjust(int argc, char** argv) {
                  "auto (control with 3+ control points, else minimum with a "
                  "vertical bar, else free), control, minimum or free")
       ->transform(CLI::IsMember({"auto", "control", "minimum", "free"}));
+  app.add_option("--upright",
+                 input_options.datum.upright,
+                 "Free network: 1 = z along the photographs' up direction, "
+                 "origin at the object's centre (0 = the relative "
+                 "orientation's coordinates)");
   app.add_option("--datum_point",
                  input_options.datum.datum_point,
                  "Minimum datum: the point that fixes the rotation about the "

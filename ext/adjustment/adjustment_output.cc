@@ -136,6 +136,9 @@ class ReportBuilder {
     json["type"] = DatumTypeName(datum.type);
     json["description"] = datum.description;
     json["precision"] = PrecisionMeaning();
+    // What z is: up from the control or the bar, up from the photographs
+    // (an upright free network), or "" (arbitrary).
+    json["vertical"] = datum.vertical;
     if (datum.type == DatumType::kFree) {
       json["num_datum_points"] = precision_.num_datum_points;
       json["min_datum_intersection_angle_deg"] = kMinDatumIntersectionAngleDeg;

@@ -4,6 +4,7 @@
 #include "ext/adjustment/triangulation.h"
 #include "ext/core/alignment.h"
 #include "ext/core/errors.h"
+#include "ext/core/upright.h"
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
@@ -305,6 +306,7 @@ class DatumBuilder {
     for (const BlockPoint& point : block_->points) {
       num_fixed += point.kind == PointKind::kControl && point.AllFixed();
     }
+    setup_.vertical = "the control points";
     setup_.description = StrCat(setup_.num_control_points,
                                 " control points (",
                                 num_fixed,
@@ -459,6 +461,7 @@ class DatumBuilder {
       ++setup_.num_check_points;
     }
     AddManualTiePoints();
+    setup_.vertical = "the levelling bar";
     setup_.description = StrCat("minimum datum: levelling bar ",
                                 bar.name1,
                                 "-",
@@ -483,6 +486,9 @@ class DatumBuilder {
     if (block_->images.size() < 2) {
       ThrowInputError("a free network needs two or more images");
     }
+    // Turned first: the held centre coordinate below is chosen in the
+    // frame the solution runs in.
+    if (options_.upright) TurnUpright();
     // The first image and one centre coordinate of the image farthest from
     // it: seven parameters, the minimal datum of the solution.
     BlockImage& first = block_->images[0];
@@ -504,6 +510,34 @@ class DatumBuilder {
     setup_.description =
         "free network, inner constraints over the tie points (minimum "
         "trace of their covariance)";
+    if (!setup_.vertical.empty()) {
+      setup_.description +=
+          "; z up along " + setup_.vertical + ", origin at the object's centre";
+    }
+  }
+
+  // z along the photographs' up direction, the origin at the object's
+  // centre, the scale kept; the held parameters above stay held at their
+  // turned values.
+  void TurnUpright() {
+    std::vector<Rigid3d> poses;
+    for (const BlockImage& image : block_->images) {
+      poses.push_back(image.CamFromWorld());
+    }
+    std::vector<Eigen::Vector3d> points;
+    for (const BlockPoint& point : block_->points) points.push_back(point.xyz);
+    const std::optional<UprightFrame> frame =
+        EstimateUprightFrame(poses, points);
+    if (!frame) {
+      setup_.notes.push_back(
+          "free network: the photographs' up directions cancel; the model "
+          "keeps the relative orientation's coordinates (z arbitrary)");
+      return;
+    }
+    setup_.object_from_model = Sim3d(
+        1.0, frame->new_from_old.rotation, frame->new_from_old.translation);
+    TransformBlock(setup_.object_from_model, block_);
+    setup_.vertical = frame->source;
   }
 
   const ControlData& control_;

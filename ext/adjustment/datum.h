@@ -24,7 +24,11 @@
 //            (the first image's pose and one centre coordinate of the image
 //            farthest from it), the result and its precision transformed to
 //            inner constraints over the tie points (adjustment.h). Control
-//            files are not used.
+//            files are not used. With `upright` (the default) the block is
+//            first turned so that z is the photographs' up direction and
+//            moved so that the origin is at the object's centre, its scale
+//            kept (ext/core/upright.h): render, the viewer and the cylinder
+//            mesher, which take z as up, then show the object standing.
 //  auto      control with three or more control points, else minimum with a
 //            vertical distance, else free.
 //
@@ -71,6 +75,9 @@ struct DatumOptions {
   // Control points whose residual in the similarity exceeds this (metres;
   // 0: 2.5 robust standard deviations) are reported as suspect.
   double max_similarity_residual_m = 0.0;
+  // Free network: z up along the photographs' up direction, the origin at
+  // the object's centre (0: the relative orientation's coordinates).
+  bool upright = true;
   void Check() const;
 };
 
@@ -84,6 +91,9 @@ struct DatumSetup {
   DatumType type = DatumType::kFree;
   std::string description;
   Sim3d object_from_model;  // applied to the block's approximations
+  // What gave the vertical: the control, the levelling bar, or for an
+  // upright free network the photographs (empty: none, z is arbitrary).
+  std::string vertical;
   std::vector<SimilarityResidual> similarity_residuals;
   double similarity_rms_m = 0;
   int num_control_points = 0;

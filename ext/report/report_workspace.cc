@@ -161,6 +161,11 @@ bool IsDatumMetric(const Workspace& ws) {
   return type == "control" || type == "minimum";
 }
 
+bool IsDatumUpright(const Workspace& ws) {
+  return IsDatumMetric(ws) ||
+         !String(Child(ws.adjustment.json, "datum"), "vertical").empty();
+}
+
 Units DatumUnits(const Workspace& ws) {
   if (IsDatumMetric(ws)) return {"m", "mm"};
   return {"model units", "10<sup>&minus;3</sup>&nbsp;units"};

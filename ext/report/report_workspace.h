@@ -80,8 +80,11 @@ struct Workspace {
 Workspace LoadWorkspace(const std::string& workspace_path);
 
 // Whether the adjustment's datum is metric and z-up (control or minimum);
-// a free network keeps the strip's model units and orientation.
+// a free network keeps the strip's model units.
 bool IsDatumMetric(const Workspace& ws);
+// Whether z is up: a metric datum, or a free network turned upright by the
+// photographs' up direction (adjustment.json's datum.vertical).
+bool IsDatumUpright(const Workspace& ws);
 
 // Units of object coordinates and of their precision, as HTML.
 struct Units {

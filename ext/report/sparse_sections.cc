@@ -151,8 +151,9 @@ std::vector<CameraStation> Stations(const Scene& model) {
 }
 
 // The axes of the two views: the plan view looks down `up` onto (e1, e2),
-// the side view along e2 onto (e1, up). A metric datum is z-up. In a free
-// network the stations' own geometry decides: stations spread in two
+// the side view along e2 onto (e1, up). A metric datum is z-up, and so is
+// an upright free network (datum.vertical). In an older free network the
+// stations' own geometry decides: stations spread in two
 // dimensions (a ring, a block) are seen onto their plane, so that a ring
 // shows as a ring whichever way the photographs were turned; stations along
 // a line (a strip along a facade) are seen from the photographs' up
@@ -167,9 +168,9 @@ struct ViewAxes {
 };
 
 ViewAxes ChooseViewAxes(const std::vector<CameraStation>& stations,
-                        bool metric) {
+                        bool upright) {
   ViewAxes axes;
-  if (metric || stations.size() < 2) return axes;
+  if (upright || stations.size() < 2) return axes;
   axes.datum_axes = false;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const CameraStation& s : stations) mean += s.center;
@@ -247,7 +248,7 @@ std::string StationView(const Workspace& ws,
 Section NetworkSection(const Workspace& ws, Page* page) {
   Section section{"network", "Image network"};
   const std::vector<CameraStation> stations = Stations(ws.model);
-  const ViewAxes axes = ChooseViewAxes(stations, IsDatumMetric(ws));
+  const ViewAxes axes = ChooseViewAxes(stations, IsDatumUpright(ws));
   const Units units = DatumUnits(ws);
   const std::string unit = " [" + units.length + "]";
   std::string text = FormatCount(ws.model.images.size()) + " images oriented";
