@@ -17,6 +17,7 @@
 #include "ext/eval/cloud_edit_eval.h"
 #include "ext/eval/mesh_distance.h"
 #include "ext/eval/relative_eval.h"
+#include "ext/eval/silhouette_eval.h"
 #include "ext/eval/sparse_eval.h"
 #include "ext/eval/surface_eval.h"
 #include "ext/eval/texture_eval.h"
@@ -281,6 +282,8 @@ int RunEvaluate(int argc, char** argv) {
   // as much a blunder as an injected one.
   double off_surface_m = 0.01;
   int num_samples = 200000, num_threads = -1;
+  std::string silhouette_image_path;
+  SilhouetteOptions silhouette;
   CommandLine command(
       "evaluate",
       "Compare results with the ground truth: a sparse model (registered "
@@ -294,8 +297,8 @@ int RunEvaluate(int argc, char** argv) {
   CLI::App& app = command.app();
   app.add_option("--ground_truth_path",
                  ground_truth_path,
-                 "True model folder, or a synthetic workspace's gt/ folder")
-      ->required();
+                 "True model folder, or a synthetic workspace's gt/ folder "
+                 "(required but for silhouettes)");
   app.add_option("--input_path", input_path, "Sparse model to evaluate");
   app.add_option("--calibration_path",
                  calibration_path,
@@ -352,6 +355,18 @@ int RunEvaluate(int argc, char** argv) {
   app.add_option("--render_path",
                  render_path,
                  "Write the renders of the texture evaluation here");
+  app.add_option("--silhouette_image_path",
+                 silhouette_image_path,
+                 "Photographs of an object on a dark background: --mesh_path "
+                 "carried into them through --input_path's cameras, its "
+                 "silhouette's IoU with the object (no ground truth needed)");
+  app.add_option("--silhouette_threshold",
+                 silhouette.grey_threshold,
+                 "Silhouettes: grey value above which a pixel is the object's");
+  app.add_option("--silhouette_mask_path",
+                 silhouette.mask_dir,
+                 "Silhouettes: write the masks here (white both, red model "
+                 "only, blue photograph only)");
   app.add_option("--output_path", output_path, "Write the report as JSON here");
   app.add_option(
       "--align", align, "1: fit a similarity first; 0: both share a datum");
@@ -359,6 +374,42 @@ int RunEvaluate(int argc, char** argv) {
   app.add_option("--num_threads", num_threads, "Threads (-1: all cores)");
   if (!command.Parse(argc, argv)) return 0;
 
+  if (!silhouette_image_path.empty()) {
+    if (mesh_path.empty() || input_path.empty()) {
+      ThrowInputError(
+          "--silhouette_image_path needs the mesh (--mesh_path) and the "
+          "model whose cameras see it (--input_path)");
+    }
+    silhouette.num_threads = num_threads;
+    silhouette.Check();
+    CheckFileExists(mesh_path, "--mesh_path");
+    const Scene scene = ReadOrientedModel(input_path, "");
+    const SilhouetteEvaluation evaluation = EvaluateSilhouettes(
+        ReadMeshPly(mesh_path), scene, silhouette_image_path, silhouette);
+    std::printf("%s", SilhouetteTable(evaluation).c_str());
+    Json report;
+    report["mesh_path"] = mesh_path;
+    report["input_path"] = input_path;
+    report["silhouettes"] = {{"threshold", silhouette.grey_threshold},
+                             {"mean_iou", evaluation.mean_iou},
+                             {"min_iou", evaluation.min_iou},
+                             {"worst", evaluation.worst},
+                             {"views", Json::array()}};
+    for (const SilhouetteView& v : evaluation.views) {
+      report["silhouettes"]["views"].push_back(
+          {{"name", v.name},
+           {"iou", v.iou},
+           {"model_only", v.model_only},
+           {"photograph_only", v.photograph_only}});
+    }
+    if (!output_path.empty()) {
+      WriteFileAtomically(output_path, report.dump(2) + "\n");
+    }
+    return 0;
+  }
+  if (ground_truth_path.empty()) {
+    ThrowInputError("--ground_truth_path is required");
+  }
   if (input_path.empty() && cloud_path.empty() && mesh_path.empty() &&
       textured_mesh_path.empty() && database_path.empty()) {
     ThrowInputError(

@@ -1,0 +1,144 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/eval/silhouette_eval.h"
+
+#include "ext/core/errors.h"
+#include "ext/image/image_io.h"
+#include "ext/render/mesh_renderer.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace bayon {
+
+void SilhouetteOptions::Check() const {
+  CheckOption(grey_threshold >= 0 && grey_threshold < 255,
+              "--silhouette_threshold",
+              "in [0, 255)",
+              grey_threshold);
+  CheckOption(min_coverage > 0 && min_coverage <= 1,
+              "SilhouetteOptions.min_coverage",
+              "in (0, 1]",
+              min_coverage);
+  CheckOption(supersampling >= 1 && supersampling <= 8,
+              "SilhouetteOptions.supersampling",
+              "in [1, 8]",
+              supersampling);
+}
+
+SilhouetteEvaluation EvaluateSilhouettes(const TriangleMesh& mesh,
+                                         const Scene& scene,
+                                         const std::string& image_path,
+                                         const SilhouetteOptions& options) {
+  options.Check();
+  if (mesh.faces.empty()) ThrowInputError("silhouettes: the mesh has no faces");
+  // Read every photograph first: a missing one stops before any rendering.
+  std::vector<std::pair<const Image*, cv::Mat>> photographs;
+  for (const auto& [image_id, image] : scene.images) {
+    photographs.emplace_back(
+        &image,
+        ReadImage((fs::path(image_path) / image.name).string(),
+                  ImageReadMode::kGray));
+  }
+  if (!options.mask_dir.empty()) fs::create_directories(options.mask_dir);
+  const MeshRenderer renderer(mesh);
+  RenderOptions render;
+  render.supersampling = options.supersampling;
+  render.geometry_buffers = false;
+  render.num_threads = options.num_threads;
+  SilhouetteEvaluation evaluation;
+  evaluation.min_iou = 1;
+  for (const auto& [image, photograph] : photographs) {
+    const Camera& camera = scene.cameras.at(image->camera_id);
+    if (static_cast<uint64_t>(photograph.cols) != camera.width ||
+        static_cast<uint64_t>(photograph.rows) != camera.height) {
+      ThrowInputError(image_path,
+                      "/",
+                      image->name,
+                      ": ",
+                      photograph.cols,
+                      " x ",
+                      photograph.rows,
+                      " pixels, but its camera has ",
+                      camera.width,
+                      " x ",
+                      camera.height);
+    }
+    RenderView view;
+    view.camera = camera;
+    view.cam_from_world = image->cam_from_world;
+    view.frame = image->frame;
+    const RenderResult rendered = renderer.Render(view, Lighting(), render);
+    cv::Mat grey;
+    photograph.convertTo(
+        grey, CV_32F, photograph.depth() == CV_16U ? 1.0 / 257 : 1.0);
+    const cv::Mat object = grey > options.grey_threshold;
+    const cv::Mat model = rendered.coverage >= options.min_coverage;
+    const double both = cv::countNonZero(object & model);
+    const double model_only = cv::countNonZero(model & ~object);
+    const double photograph_only = cv::countNonZero(object & ~model);
+    const double united = both + model_only + photograph_only;
+    SilhouetteView& result = evaluation.views.emplace_back();
+    result.name = image->name;
+    result.iou = united > 0 ? both / united : 0;
+    result.model_only = united > 0 ? model_only / united : 0;
+    result.photograph_only = united > 0 ? photograph_only / united : 0;
+    if (result.iou < evaluation.min_iou || evaluation.worst.empty()) {
+      evaluation.min_iou = result.iou;
+      evaluation.worst = result.name;
+    }
+    evaluation.mean_iou += result.iou;
+    if (!options.mask_dir.empty()) {
+      // BGR: both white, the model alone red, the photograph alone blue.
+      cv::Mat mask(object.size(), CV_8UC3, cv::Scalar(0, 0, 0));
+      mask.setTo(cv::Scalar(255, 255, 255), object & model);
+      mask.setTo(cv::Scalar(0, 0, 255), model & ~object);
+      mask.setTo(cv::Scalar(255, 0, 0), object & ~model);
+      std::string stem = fs::path(image->name).stem().string();
+      std::replace(stem.begin(), stem.end(), '/', '_');
+      WriteImage((fs::path(options.mask_dir) / (stem + ".png")).string(), mask);
+    }
+  }
+  if (!evaluation.views.empty()) {
+    evaluation.mean_iou /= static_cast<double>(evaluation.views.size());
+  }
+  return evaluation;
+}
+
+std::string SilhouetteTable(const SilhouetteEvaluation& evaluation) {
+  std::string table;
+  char line[256];
+  std::snprintf(line,
+                sizeof(line),
+                "%-24s %8s %12s %16s\n",
+                "silhouette",
+                "IoU",
+                "model only",
+                "photograph only");
+  table += line;
+  for (const SilhouetteView& v : evaluation.views) {
+    std::snprintf(line,
+                  sizeof(line),
+                  "%-24s %8.3f %11.1f%% %15.1f%%\n",
+                  v.name.c_str(),
+                  v.iou,
+                  100 * v.model_only,
+                  100 * v.photograph_only);
+    table += line;
+  }
+  std::snprintf(line,
+                sizeof(line),
+                "%-24s %8.3f   (worst %s, %.3f)\n",
+                "mean",
+                evaluation.mean_iou,
+                evaluation.worst.c_str(),
+                evaluation.min_iou);
+  table += line;
+  return table;
+}
+
+}  // namespace bayon
