@@ -4,6 +4,7 @@
 // dense cloud with known surface and blunders, edited and meshed through the
 // command line, the outputs read back and judged against the truth; and bad
 // input refused with one line, nothing written.
+#include "ext/colmap/model_io.h"
 #include "ext/colmap/ply_io.h"
 #include "ext/core/file_util.h"
 #include "ext/core/mesh_geometry.h"
@@ -360,6 +361,53 @@ TEST(MeshCommand, BadInput) {
                              "cloud has none",
                              fixture + "/plain.ply",
                              {out});
+  // delaunay_graph_cut: its rays need the oriented model and the images
+  // that saw each point; a cloud too sparse is refused, not meshed by the
+  // cylinder instead.
+  ExpectRefusedWithoutOutput({"mesh",
+                              "--input_path",
+                              fixture + "/plain.ply",
+                              "--output_path",
+                              out,
+                              "--method",
+                              "delaunay_graph_cut"},
+                             "--method delaunay_graph_cut needs --sparse_path",
+                             fixture + "/plain.ply",
+                             {out});
+  Scene model;
+  Camera camera = Camera::Create(CameraModelId::kPinhole, 500, 600, 400);
+  camera.camera_id = 1;
+  model.cameras.Set(1, camera);
+  Image image;
+  image.image_id = 7;
+  image.camera_id = 1;
+  image.name = "a.png";
+  model.images.Set(7, image);
+  fs::create_directories(dir + "/sparse");
+  WriteModel(model, dir + "/sparse", ModelFormat::kBinary);
+  const std::vector<std::string> graph_cut = {
+      "--method", "delaunay_graph_cut", "--sparse_path", dir + "/sparse"};
+  std::vector<std::string> args = {
+      "mesh", "--input_path", fixture + "/plain.ply", "--output_path", out};
+  args.insert(args.end(), graph_cut.begin(), graph_cut.end());
+  ExpectRefusedWithoutOutput(args,
+                             "plain.ply: delaunay_graph_cut needs the images "
+                             "that saw each point",
+                             fixture + "/plain.ply",
+                             {out});
+  PointCloud sparse;
+  for (int i = 0; i < 50; ++i) {
+    sparse.positions.emplace_back(std::cos(i), std::sin(i), 0.01 * i);
+  }
+  sparse.AddAttribute("master_id", PlyScalarType::kInt, 7);
+  WritePointCloudPly(sparse, dir + "/sparse.ply");
+  args = {"mesh", "--input_path", dir + "/sparse.ply", "--output_path", out};
+  args.insert(args.end(), graph_cut.begin(), graph_cut.end());
+  ExpectRefusedWithoutOutput(
+      args,
+      "delaunay_graph_cut: 50 points are too sparse to close a surface",
+      dir + "/sparse.ply",
+      {out});
   ExpectRefusedWithoutOutput({"mesh",
                               "--input_path",
                               fixture + "/plain.ply",

@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
+#include "ext/colmap/model_io.h"
 #include "ext/colmap/ply_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
@@ -75,10 +76,55 @@ nlohmann::ordered_json ReportToJson(const MeshReport& r,
   return json;
 }
 
+// The rays of delaunay_graph_cut: the model's projection centres (in the
+// order of its images, as .vis files index them) and per point the images
+// that saw it, from the .vis or the points' master_id.
+void ReadStations(const std::string& cloud_path,
+                  const std::string& sparse_path,
+                  std::string visibility_path,
+                  MeshOptions* options) {
+  const Scene scene = ReadModel(sparse_path);
+  std::map<image_t, int> index_of;
+  for (const auto& [image_id, image] : scene.images) {
+    index_of[image_id] = static_cast<int>(options->stations.size());
+    options->stations.push_back(image.cam_from_world.Center());
+  }
+  if (visibility_path.empty() && std::filesystem::exists(cloud_path + ".vis")) {
+    visibility_path = cloud_path + ".vis";
+  }
+  if (!visibility_path.empty()) {
+    for (const std::vector<uint32_t>& seen :
+         ReadColmapVisibility(visibility_path)) {
+      options->point_stations.emplace_back(seen.begin(), seen.end());
+    }
+    return;
+  }
+  const PointCloud cloud = ReadPointCloudPly(cloud_path);
+  const PointAttribute* master = cloud.FindAttribute("master_id");
+  if (master == nullptr) {
+    ThrowInputError(cloud_path,
+                    ": delaunay_graph_cut needs the images that saw each "
+                    "point: a .vis beside it (--visibility_path) or the "
+                    "master_id attribute of bayon dense's clouds");
+  }
+  for (double id : master->values) {
+    const auto it = index_of.find(static_cast<image_t>(id));
+    if (it == index_of.end()) {
+      ThrowInputError(cloud_path,
+                      ": a point's master_id ",
+                      static_cast<int64_t>(id),
+                      " is no image of ",
+                      sparse_path);
+    }
+    options->point_stations.push_back({it->second});
+  }
+}
+
 }  // namespace
 
 int RunMesh(int argc, char** argv) {
-  std::string input_path, output_path, report_path, log_path;
+  std::string input_path, output_path, report_path, log_path, sparse_path;
+  std::string visibility_path;
   std::string method_name = "cylinder", metric_name = "profile";
   std::string orientation_name = "mst";
   std::string axis_direction = "0,0,1", axis_point;
@@ -98,13 +144,36 @@ int RunMesh(int argc, char** argv) {
       ->required();
   app.add_option("--method",
                  method_name,
-                 "cylinder, greedy_projection, poisson, advancing_front; "
-                 "colmap_poisson (stock COLMAP, for comparison)")
+                 "cylinder, greedy_projection, poisson, advancing_front, "
+                 "delaunay_graph_cut; colmap_poisson (stock COLMAP, for "
+                 "comparison)")
       ->transform(CLI::IsMember({"cylinder",
                                  "greedy_projection",
                                  "poisson",
                                  "advancing_front",
-                                 "colmap_poisson"}));
+                                 "colmap_poisson",
+                                 "delaunay_graph_cut"}));
+  app.add_option("--sparse_path",
+                 sparse_path,
+                 "delaunay_graph_cut: the oriented model whose images saw "
+                 "the points (their projection centres: the rays)");
+  app.add_option("--visibility_path",
+                 visibility_path,
+                 "delaunay_graph_cut: which images saw each point, as "
+                 "COLMAP's fused.ply.vis (default: --input_path + .vis "
+                 "where it exists, else each point's master_id)");
+  app.add_option("--min_distance_factor",
+                 options.delaunay_graph_cut.min_distance_factor,
+                 "delaunay_graph_cut: points closer than this many spacings "
+                 "are one vertex");
+  app.add_option("--dgc_max_edge_factor",
+                 options.delaunay_graph_cut.max_edge_factor,
+                 "delaunay_graph_cut: leave out faces with an edge longer "
+                 "than this many spacings (0 = none)");
+  app.add_option("--inside_depth_factor",
+                 options.delaunay_graph_cut.inside_depth_factor,
+                 "delaunay_graph_cut: rays end this many spacings behind "
+                 "their points, inside");
   app.add_option("--axis_direction",
                  axis_direction,
                  "cylinder: the object's vertical axis, x,y,z (datum z)");
@@ -196,6 +265,14 @@ int RunMesh(int argc, char** argv) {
   }
   options.Check();
   CheckFileExists(input_path, "--input_path");
+  if (options.method == MeshMethod::kDelaunayGraphCut) {
+    if (sparse_path.empty()) {
+      ThrowInputError(
+          "--method delaunay_graph_cut needs --sparse_path, the oriented "
+          "model whose images saw the points");
+    }
+    ReadStations(input_path, sparse_path, visibility_path, &options);
+  }
   if (!IsMeshFormatSupported(output_path)) {
     ThrowInputError("--output_path ",
                     output_path,

@@ -377,7 +377,9 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
   add({"mesh",
        "bayon",
        "mesh",
+       // The oriented model gives delaunay_graph_cut its rays.
        {{"input_path", edited},
+        {"sparse_path", adjusted},
         {"output_path", mesh},
         {"report_path", In(w, "mesh/mesh.json")},
         {"num_threads", threads}},

@@ -722,4 +722,47 @@ void WriteColmapFusedPly(const PointCloud& cloud,
   WritePointCloudPly(fused, path, options);
 }
 
+std::vector<std::vector<uint32_t>> ReadColmapVisibility(
+    const std::string& path) {
+  const std::string data = ReadFileToString(path);
+  size_t offset = 0;
+  const auto get = [&](auto* value) {
+    if (offset + sizeof(*value) > data.size()) {
+      ThrowInputError(
+          path, ": truncated visibility file (", data.size(), " bytes)");
+    }
+    std::memcpy(value, data.data() + offset, sizeof(*value));
+    offset += sizeof(*value);
+  };
+  uint64_t count = 0;
+  get(&count);
+  // Each point takes four bytes at least: a count beyond the file's size is
+  // no visibility file.
+  if (count > data.size() / 4) {
+    ThrowInputError(path,
+                    ": not a visibility file (",
+                    count,
+                    " points in ",
+                    data.size(),
+                    " bytes)");
+  }
+  std::vector<std::vector<uint32_t>> visibility(count);
+  for (std::vector<uint32_t>& images : visibility) {
+    uint32_t n = 0;
+    get(&n);
+    if (n > (data.size() - offset) / 4) {
+      ThrowInputError(path, ": truncated visibility file");
+    }
+    images.resize(n);
+    for (uint32_t& index : images) get(&index);
+  }
+  if (offset != data.size()) {
+    ThrowInputError(path,
+                    ": ",
+                    data.size() - offset,
+                    " bytes after the last point's visibility");
+  }
+  return visibility;
+}
+
 }  // namespace bayon

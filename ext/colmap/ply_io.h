@@ -61,4 +61,10 @@ void WriteColmapFusedPly(
     const std::string& comment,
     const std::vector<std::vector<uint32_t>>* visibility = nullptr);
 
+// A fused.ply.vis as WriteColmapFusedPly and COLMAP's fusion write it.
+// Throws InputError naming the file when it is missing, truncated or longer
+// than its counts say.
+std::vector<std::vector<uint32_t>> ReadColmapVisibility(
+    const std::string& path);
+
 }  // namespace bayon

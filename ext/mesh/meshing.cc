@@ -24,6 +24,8 @@ std::string MeshMethodName(MeshMethod method) {
       return "advancing_front";
     case MeshMethod::kColmapPoisson:
       return "colmap_poisson";
+    case MeshMethod::kDelaunayGraphCut:
+      return "delaunay_graph_cut";
   }
   return "?";
 }
@@ -33,12 +35,13 @@ MeshMethod ParseMeshMethod(const std::string& name) {
                             MeshMethod::kGreedyProjection,
                             MeshMethod::kPoisson,
                             MeshMethod::kAdvancingFront,
-                            MeshMethod::kColmapPoisson}) {
+                            MeshMethod::kColmapPoisson,
+                            MeshMethod::kDelaunayGraphCut}) {
     if (name == MeshMethodName(method)) return method;
   }
   ThrowInputError(
       "--method must be one of cylinder, greedy_projection, "
-      "poisson, advancing_front, colmap_poisson (got '",
+      "poisson, advancing_front, colmap_poisson, delaunay_graph_cut (got '",
       name,
       "')");
 }
@@ -98,6 +101,7 @@ void MeshOptions::Check() const {
   greedy_projection.Check();
   poisson.Check();
   advancing_front.Check();
+  delaunay_graph_cut.Check();
   normals.Check();
   cleanup.Check();
 }
@@ -204,6 +208,15 @@ TriangleMesh MeshPointCloud(const PointCloud& input,
       raw =
           ColmapPoissonMesh(cloud, options.colmap_poisson, options.num_threads);
       break;
+    case MeshMethod::kDelaunayGraphCut: {
+      raw = DelaunayGraphCutMesh(cloud,
+                                 options.stations,
+                                 options.point_stations,
+                                 options.delaunay_graph_cut,
+                                 report->median_spacing,
+                                 options.num_threads);
+      break;
+    }
   }
   report->seconds_method = method_timer.Seconds();
   report->num_raw_faces = raw.NumFaces();

@@ -15,6 +15,12 @@
 //                     Steiner, Da 2004): interpolating, from the 3D Delaunay
 //                     triangulation, no normals; the "efficient 3D
 //                     triangulator" the paper's conclusion asks for;
+//  kDelaunayGraphCut  the points' 3D Delaunay tetrahedra labelled inside or
+//                     outside by the rays from the projection centres to the
+//                     points they saw and a minimum cut (Labatut, Pons,
+//                     Keriven 2007; delaunay_graph_cut.cc): interpolating,
+//                     closes the seen surface, needs each point's station
+//                     (the dense cloud's master_id and the oriented model);
 //  kColmapPoisson     for comparison: stock `colmap poisson_mesher` (screened
 //                     Poisson, Kazhdan and Hoppe 2013) run through
 //                     ext/colmap/colmap_cli on the cloud written as COLMAP's
@@ -33,6 +39,7 @@
 #include "ext/mesh/normals.h"
 
 #include <string>
+#include <vector>
 
 namespace bayon {
 
@@ -41,7 +48,8 @@ enum class MeshMethod {
   kGreedyProjection,
   kPoisson,
   kAdvancingFront,
-  kColmapPoisson
+  kColmapPoisson,
+  kDelaunayGraphCut
 };
 // "cylinder", "greedy_projection", "poisson", "advancing_front",
 // "colmap_poisson"; the parser
@@ -87,6 +95,19 @@ struct AdvancingFrontOptions {
   void Check() const;
 };
 
+struct DelaunayGraphCutOptions {
+  // Points closer than this many median spacings (a grid cell) are one
+  // vertex, whose rays they all give: fewer tetrahedra, the same surface.
+  double min_distance_factor = 1.0;
+  // Each ray ends this many median spacings behind its point: the
+  // tetrahedron there is inside.
+  double inside_depth_factor = 2.0;
+  // Faces with an edge longer than this many median spacings are left out
+  // (0: none): they span what no photograph showed.
+  double max_edge_factor = 0;
+  void Check() const;
+};
+
 struct ColmapPoissonOptions {
   // COLMAP's PoissonMeshing options. Its default depth 13 takes many
   // minutes on two cores; 9 matches bayon's own Poisson. The trim removes
@@ -110,6 +131,12 @@ struct MeshOptions {
   PoissonOptions poisson;
   AdvancingFrontOptions advancing_front;
   ColmapPoissonOptions colmap_poisson;
+  DelaunayGraphCutOptions delaunay_graph_cut;
+  // kDelaunayGraphCut: the projection centres of the images, and per point
+  // the indices of those that saw it (from a fused.ply.vis, or the master
+  // image of bayon dense's points).
+  std::vector<Eigen::Vector3d> stations;
+  std::vector<std::vector<int>> point_stations;
   NormalEstimationOptions normals;
   // Estimate normals where the method needs them and the cloud has none;
   // off: refuse such a cloud with InputError.
@@ -151,6 +178,15 @@ TriangleMesh PoissonMesh(const PointCloud& cloud,
                          size_t* num_trimmed_faces);
 TriangleMesh AdvancingFrontMesh(const PointCloud& cloud,
                                 const AdvancingFrontOptions& options);
+// `point_stations`: per point the indices into `stations` of the projection
+// centres it was seen from (one or more).
+TriangleMesh DelaunayGraphCutMesh(
+    const PointCloud& cloud,
+    const std::vector<Eigen::Vector3d>& stations,
+    const std::vector<std::vector<int>>& point_stations,
+    const DelaunayGraphCutOptions& options,
+    double median_spacing,
+    int num_threads);
 // Throws RunFailure when COLMAP fails (its log path in the message).
 TriangleMesh ColmapPoissonMesh(const PointCloud& cloud,
                                const ColmapPoissonOptions& options,
