@@ -42,6 +42,7 @@ packages=(
   colmap sqlite3 libsqlite3-dev
   libeigen3-dev libceres-dev libgoogle-glog-dev libopencv-dev
   libpcl-dev libcgal-dev libopenmesh-dev libtbb-dev
+  libboost-graph-dev  # mesh's delaunay_graph_cut: Boykov-Kolmogorov max flow
   libcli11-dev nlohmann-json3-dev libexiv2-dev libtinygltf-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium  # viewer_test opens the page of bayon viewer in it
