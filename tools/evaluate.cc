@@ -393,6 +393,7 @@ int RunEvaluate(int argc, char** argv) {
     report["silhouettes"] = {{"threshold", silhouette.grey_threshold},
                              {"mean_iou", evaluation.mean_iou},
                              {"min_iou", evaluation.min_iou},
+                             {"mean_best_iou", evaluation.mean_best_iou},
                              {"worst", evaluation.worst},
                              {"views", Json::array()}};
     for (const SilhouetteView& v : evaluation.views) {
@@ -400,7 +401,8 @@ int RunEvaluate(int argc, char** argv) {
           {{"name", v.name},
            {"iou", v.iou},
            {"model_only", v.model_only},
-           {"photograph_only", v.photograph_only}});
+           {"photograph_only", v.photograph_only},
+           {"best_iou", v.best_iou}});
     }
     if (!output_path.empty()) {
       WriteFileAtomically(output_path, report.dump(2) + "\n");

@@ -8,7 +8,10 @@
 // the figure is the intersection over union of the two regions per
 // photograph. The background's own clutter (a fold of cloth, a stand) that
 // passes the threshold counts against the model: the masks written for
-// looking show where.
+// looking show where. What the clutter leaves possible is estimated too:
+// the parts of the object region (8-connected) that the model's silhouette
+// does not touch at all are taken as clutter, and the best IoU is that of
+// a model covering exactly the rest.
 #pragma once
 
 #include "ext/core/point_cloud.h"
@@ -40,12 +43,16 @@ struct SilhouetteView {
   // object region, and the object's pixels the model leaves out.
   double model_only = 0;
   double photograph_only = 0;
+  // The IoU of a model covering exactly the object region less the clutter
+  // (the region's parts the model does not touch).
+  double best_iou = 1;
 };
 
 struct SilhouetteEvaluation {
   std::vector<SilhouetteView> views;
   double mean_iou = 0;
   double min_iou = 0;
+  double mean_best_iou = 0;
   std::string worst;  // the view of min_iou
 };
 

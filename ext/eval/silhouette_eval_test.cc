@@ -74,6 +74,13 @@ TEST(Silhouettes, IoUOfTheModelCarriedIntoThePhotographs) {
   EXPECT_NEAR(moved.mean_iou, 0.6, 0.03);
   EXPECT_NEAR(moved.views[0].model_only, 0.2, 0.02);
   EXPECT_NEAR(moved.views[0].photograph_only, 0.2, 0.02);
+  EXPECT_EQ(moved.views[0].best_iou, 1.0);
+  // A square the model misses altogether is clutter: the best a model can
+  // do is cover the rest.
+  const SilhouetteEvaluation other =
+      EvaluateSilhouettes(Square(3), scene, dir + "/images", options);
+  EXPECT_EQ(other.views[0].iou, 0.0);
+  EXPECT_EQ(other.views[0].best_iou, 0.0);
 }
 
 TEST(Silhouettes, RefusesMissingPhotographsAndEmptyMeshes) {
