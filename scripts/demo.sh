@@ -77,9 +77,18 @@ $bayon pipeline --workspace_path "$ws" --image_path "$images" \
 echo
 echo "== 3. bayon beside stock COLMAP, both against the truth"
 cat "$ws/colmap/comparison.txt"
+if [ "$set_name" = temple ]; then
+  echo
+  echo "== 4. the model carried back into the photographs: its silhouette against the temple's (IoU)"
+  $bayon evaluate --silhouette_image_path "$images" --mesh_path "$ws/mesh/mesh.ply" \
+    --input_path "$ws/sparse/adjusted" --silhouette_mask_path "$ws/silhouettes" \
+    --output_path "$ws/silhouettes.json" | tail -1
+fi
 echo
 echo "demo finished in $(( $(date +%s) - start )) s (after the build)"
 echo "  report:  $ws/report.html"
 echo "  model:   $ws/model/model.obj, .ply, .wrl, .glb (atlas model.png)"
 echo "  viewer:  $ws/viewer/index.html (opens offline in a browser)"
-echo "  renders: $ws/renders/"
+echo "  renders: $ws/renders/ (textured_*.png, shaded_*.png: the model upright, all round)"
+[ "$set_name" = temple ] && echo "  silhouettes: $ws/silhouettes/ (white both, red model only, blue photograph only)"
+true
