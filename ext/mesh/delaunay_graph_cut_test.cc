@@ -57,15 +57,19 @@ double SignedVolume(const TriangleMesh& mesh) {
   return volume;
 }
 
+// The sphere scene of 4000 points meshed with the default options.
+TriangleMesh MeshSphere(const SphereScene& scene) {
+  return DelaunayGraphCutMesh(scene.cloud,
+                              scene.stations,
+                              scene.point_stations,
+                              DelaunayGraphCutOptions(),
+                              std::sqrt(4 * M_PI / 4000),
+                              2);
+}
+
 TEST(DelaunayGraphCut, ClosesASphereSeenAllRoundFacingOutwards) {
   const SphereScene scene = MakeSphereScene(4000);
-  const double spacing = std::sqrt(4 * M_PI / 4000);
-  const TriangleMesh mesh = DelaunayGraphCutMesh(scene.cloud,
-                                                 scene.stations,
-                                                 scene.point_stations,
-                                                 DelaunayGraphCutOptions(),
-                                                 spacing,
-                                                 2);
+  const TriangleMesh mesh = MeshSphere(scene);
   ASSERT_GT(mesh.faces.size(), 4000u);
   // Faces on the sphere (their centroids within a chord's sag of it) and
   // counter-clockwise from outside: the enclosed volume is the sphere's,
@@ -138,18 +142,13 @@ TEST(DelaunayGraphCut, CarvesTheHoleOfATorus) {
 
 TEST(DelaunayGraphCut, CarvesABlunderInFreeSpace) {
   SphereScene scene = MakeSphereScene(4000);
-  // A point half way to station 0, seen only from it: the other stations'
-  // rays pass by it through free space.
-  const Eigen::Vector3d blunder = 0.5 * scene.stations[0].normalized() * 2.2;
+  // A point a tenth of the radius in front of the sphere, towards station
+  // 0 and seen only from it: the neighbouring stations' rays to the surface
+  // behind it pass through its space.
+  const Eigen::Vector3d blunder = 1.1 * scene.stations[0].normalized();
   scene.cloud.positions.push_back(blunder);
   scene.point_stations.push_back({0});
-  const double spacing = std::sqrt(4 * M_PI / 4000);
-  const TriangleMesh mesh = DelaunayGraphCutMesh(scene.cloud,
-                                                 scene.stations,
-                                                 scene.point_stations,
-                                                 DelaunayGraphCutOptions(),
-                                                 spacing,
-                                                 2);
+  const TriangleMesh mesh = MeshSphere(scene);
   for (const Eigen::Vector3i& f : mesh.faces) {
     for (int k = 0; k < 3; ++k) {
       ASSERT_FALSE(mesh.vertices.positions[f[k]].isApprox(blunder))

@@ -106,8 +106,8 @@ struct DelaunayGraphCutOptions {
   // (0: none): they span what no photograph showed well, the ragged border
   // of a ground, the gap between columns. Rendered tower: 0 gives 90.5 % of
   // the true surface within 5 GSD at an RMS of 8.5 GSD, 50 gives 82.7 % at
-  // 2.6, 25 gives 74.5 % at 2.0, 15 gives 64.9 % at 1.7 (the cylinder: 68.3 %
-  // at 2.0); temple-ring's silhouettes: IoU 0.56 with all, 0.82 with 20.
+  // 2.6, 25 gives 74.8 % at 1.9, 15 gives 64.9 % at 1.7 (the cylinder: 68.3 %
+  // at 2.0); temple-ring's silhouettes: IoU 0.56 with all, 0.82 with 25.
   double max_edge_factor = 25;
   void Check() const;
 };

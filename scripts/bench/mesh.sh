@@ -7,7 +7,8 @@
 # peak memory (/usr/bin/time -v) per step. Then, where `scripts/bench.sh
 # dense` has made it, the same for fountain-P11's dense cloud (bayon's own
 # orientation and MPGC): edited, and meshed by the 3D methods and stock
-# `colmap poisson_mesher`.
+# `colmap poisson_mesher`; and the rendered tower's, the same, each mesh
+# against the true surface.
 #   scripts/bench.sh mesh [num_points]     (default 1000000)
 set -euo pipefail
 num_points="${1:-1000000}"
@@ -69,5 +70,44 @@ if [ -f "$fountain" ]; then
   done
 else
   echo "(fountain-P11's dense cloud: run scripts/bench.sh dense first)"
+fi
+# The rendered tower's dense cloud (scripts/bench.sh dense), edited, meshed
+# by the 3D methods and the cylinder, each against the true surface:
+# accuracy (mesh to truth) and completeness (truth within 5 GSD of the mesh).
+tower="$BAYON_BUILD/bench/dense/tower"
+if [ -f "$tower/dense/points.ply" ]; then
+  "$BAYON" edit --input_path "$tower/dense/points.ply" \
+    --output_path "$dir/dense/tower_edited.ply" >/dev/null 2>&1
+  printf '\n%-34s %8s %8s %8s %9s %7s %7s %6s\n' "tower (truth)" "acc med" "acc RMS" \
+    "acc p95" complete walls tops loops
+  printf '%-34s %8s %8s %8s %9s %7s %7s %6s\n' "" GSD GSD GSD "5 GSD" "" "" ""
+  tower_row() {
+    local label="$1"
+    shift
+    "$BAYON" mesh --input_path "$dir/dense/tower_edited.ply" \
+      --output_path "$dir/mesh/tower.ply" --overwrite 1 "$@" \
+      >"$dir/tower_mesh.log" 2>&1 || { printf '%-34s failed\n' "$label"; return; }
+    "$BAYON" evaluate --ground_truth_path "$tower/ws/gt" \
+      --mesh_path "$dir/mesh/tower.ply" --completeness_threshold_gsd 5 \
+      --output_path "$dir/tower_eval.json" >/dev/null 2>&1
+    python3 - "$label" "$dir/tower_eval.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[2]))["mesh"]
+a = m["accuracy_gsd"]
+o = m["completeness_by_orientation"]
+print("%-34s %8.2f %8.2f %8.2f %8.1f%% %6.1f%% %6.1f%% %6d" % (
+    sys.argv[1], a["median"], a["rms"], a["p95"],
+    100 * m["completeness_fraction"], 100 * o["walls"]["completeness_fraction"],
+    100 * o["tops"]["completeness_fraction"], m["topology"]["boundary_loops"]))
+PY
+  }
+  tower_row "delaunay_graph_cut (default)" --method delaunay_graph_cut \
+    --sparse_path "$tower/model"
+  tower_row "delaunay_graph_cut, no edge limit" --method delaunay_graph_cut \
+    --sparse_path "$tower/model" --dgc_max_edge_factor 0
+  tower_row "cylinder" --method cylinder
+  tower_row "poisson depth 10" --method poisson --depth 10
+else
+  echo "(the rendered tower's dense cloud: run scripts/bench.sh dense first)"
 fi
 echo "outputs and logs in $dir"

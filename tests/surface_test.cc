@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The demo's surface on the temple ring (16 x 640x480 real photographs):
+// the workspace `bayon pipeline` makes of it (tests/temple_fixture.h, dense
+// points from depth maps at half size), meshed by configs/ring.ini's
+// default, `mesh --method delaunay_graph_cut`, and carried back into the
+// photographs: its silhouette against the temple's (`evaluate
+// --silhouette_image_path`). The full-size demo's figures are in the README
+// (scripts/demo.sh temple).
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "tests/temple_fixture.h"
+#include "tests/testing.h"
+
+namespace bayon {
+namespace {
+
+TEST(Surface, TempleGraphCutMeshCoversTheTempleInEveryPhotograph) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const testing::TempleSetup temple = testing::TempleConfigFixture();
+  const std::string ws = testing::TemplePipelineWorkspace();
+  const std::string dir = testing::TempDir("surface_temple");
+  const testing::CommandResult mesh =
+      testing::RunBayon({"mesh",
+                         "--input_path",
+                         ws + "/dense/points_edited.ply",
+                         "--sparse_path",
+                         ws + "/sparse/adjusted",
+                         "--method",
+                         "delaunay_graph_cut",
+                         "--output_path",
+                         dir + "/mesh.ply",
+                         "--num_threads",
+                         "2"});
+  ASSERT_EQ(mesh.exit_code, 0) << mesh.output;
+  // The method configs/ring.ini gives the pipeline.
+  std::ifstream ring(testing::ConfigPath("ring.ini"));
+  const std::string config((std::istreambuf_iterator<char>(ring)),
+                           std::istreambuf_iterator<char>());
+  EXPECT_NE(config.find("[mesh]"), std::string::npos);
+  EXPECT_NE(config.find("method = delaunay_graph_cut"), std::string::npos);
+  const testing::CommandResult silhouettes =
+      testing::RunBayon({"evaluate",
+                         "--silhouette_image_path",
+                         temple.images,
+                         "--mesh_path",
+                         dir + "/mesh.ply",
+                         "--input_path",
+                         ws + "/sparse/adjusted",
+                         "--output_path",
+                         dir + "/silhouettes.json"});
+  ASSERT_EQ(silhouettes.exit_code, 0) << silhouettes.output;
+  std::ifstream file(dir + "/silhouettes.json");
+  const nlohmann::json report = nlohmann::json::parse(file);
+  const nlohmann::json& s = report["silhouettes"];
+  EXPECT_EQ(s["views"].size(), static_cast<size_t>(temple.num_images));
+  std::printf(
+      "temple, fixture's dense points, delaunay_graph_cut: mean IoU "
+      "%.3f, worst %.3f (%s), best possible %.3f\n",
+      s["mean_iou"].get<double>(),
+      s["min_iou"].get<double>(),
+      s["worst"].get<std::string>().c_str(),
+      s["mean_best_iou"].get<double>());
+  // Measured 2026-12-04: mean 0.727, worst 0.648 (templeSR0001), best
+  // possible 0.993. On the same points the cylinder gives 0.635 and 0.545,
+  // Poisson at depth 8 0.756 and 0.706. At full size (scripts/demo.sh
+  // temple) the graph cut gives 0.817 and 0.737; issue 30 asks 0.85 and
+  // 0.75 there (the dense points' rim at the silhouettes, README).
+  EXPECT_GT(s["mean_iou"].get<double>(), 0.70);
+  EXPECT_GT(s["min_iou"].get<double>(), 0.60);
+  EXPECT_GT(s["mean_best_iou"].get<double>(), 0.95);
+}
+
+}  // namespace
+}  // namespace bayon
