@@ -108,5 +108,25 @@ TEST(PlyIo, RefusesBrokenFiles) {
   EXPECT_EQ(ReadPointCloudPly(dir + "/cloud.ply").size(), 1u);
 }
 
+TEST(PlyIo, FusedVisibilityRoundTripAndBrokenFiles) {
+  const std::string dir = testing::TempDir("ply_io_vis");
+  const TriangleMesh mesh = Tetrahedron();
+  const std::vector<std::vector<uint32_t>> visibility = {
+      {0, 3}, {}, {7}, {1, 2, 4}};
+  WriteColmapFusedPly(mesh.vertices, dir + "/fused.ply", "test", &visibility);
+  EXPECT_EQ(ReadColmapVisibility(dir + "/fused.ply.vis"), visibility);
+  // A count beyond the file, a short record and bytes after the last one.
+  const std::string good = ReadFileToString(dir + "/fused.ply.vis");
+  for (const auto& [name, bytes] :
+       {std::pair{std::string("count.vis"),
+                  std::string("\xff\xff\xff\xff\0\0\0\0", 8)},
+        std::pair{std::string("short.vis"), good.substr(0, good.size() - 2)},
+        std::pair{std::string("long.vis"), good + std::string(4, '\0')}}) {
+    WriteFileAtomically(dir + "/" + name, bytes);
+    EXPECT_THROW(ReadColmapVisibility(dir + "/" + name), InputError) << name;
+  }
+  EXPECT_THROW(ReadColmapVisibility(dir + "/missing.vis"), InputError);
+}
+
 }  // namespace
 }  // namespace bayon
