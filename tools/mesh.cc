@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 namespace bayon {
@@ -74,50 +75,6 @@ nlohmann::ordered_json ReportToJson(const MeshReport& r,
                      {"method", r.seconds_method},
                      {"cleanup", r.seconds_cleanup}};
   return json;
-}
-
-// The rays of delaunay_graph_cut: the model's projection centres (in the
-// order of its images, as .vis files index them) and per point the images
-// that saw it, from the .vis or the points' master_id.
-void ReadStations(const std::string& cloud_path,
-                  const std::string& sparse_path,
-                  std::string visibility_path,
-                  MeshOptions* options) {
-  const Scene scene = ReadModel(sparse_path);
-  std::map<image_t, int> index_of;
-  for (const auto& [image_id, image] : scene.images) {
-    index_of[image_id] = static_cast<int>(options->stations.size());
-    options->stations.push_back(image.cam_from_world.Center());
-  }
-  if (visibility_path.empty() && std::filesystem::exists(cloud_path + ".vis")) {
-    visibility_path = cloud_path + ".vis";
-  }
-  if (!visibility_path.empty()) {
-    for (const std::vector<uint32_t>& seen :
-         ReadColmapVisibility(visibility_path)) {
-      options->point_stations.emplace_back(seen.begin(), seen.end());
-    }
-    return;
-  }
-  const PointCloud cloud = ReadPointCloudPly(cloud_path);
-  const PointAttribute* master = cloud.FindAttribute("master_id");
-  if (master == nullptr) {
-    ThrowInputError(cloud_path,
-                    ": delaunay_graph_cut needs the images that saw each "
-                    "point: a .vis beside it (--visibility_path) or the "
-                    "master_id attribute of bayon dense's clouds");
-  }
-  for (double id : master->values) {
-    const auto it = index_of.find(static_cast<image_t>(id));
-    if (it == index_of.end()) {
-      ThrowInputError(cloud_path,
-                      ": a point's master_id ",
-                      static_cast<int64_t>(id),
-                      " is no image of ",
-                      sparse_path);
-    }
-    options->point_stations.push_back({it->second});
-  }
 }
 
 }  // namespace
@@ -265,13 +222,23 @@ int RunMesh(int argc, char** argv) {
   }
   options.Check();
   CheckFileExists(input_path, "--input_path");
+  // delaunay_graph_cut's rays: the model and, where there is one, the .vis.
+  std::optional<Scene> model;
+  std::vector<std::vector<uint32_t>> visibility;
   if (options.method == MeshMethod::kDelaunayGraphCut) {
     if (sparse_path.empty()) {
       ThrowInputError(
           "--method delaunay_graph_cut needs --sparse_path, the oriented "
           "model whose images saw the points");
     }
-    ReadStations(input_path, sparse_path, visibility_path, &options);
+    model = ReadModel(sparse_path);
+    if (visibility_path.empty() &&
+        std::filesystem::exists(input_path + ".vis")) {
+      visibility_path = input_path + ".vis";
+    }
+    if (!visibility_path.empty()) {
+      visibility = ReadColmapVisibility(visibility_path);
+    }
   }
   if (!IsMeshFormatSupported(output_path)) {
     ThrowInputError("--output_path ",
@@ -286,6 +253,7 @@ int RunMesh(int argc, char** argv) {
   command.StartLog(log_path);
 
   const PointCloud cloud = ReadPointCloudPly(input_path);
+  if (model) SetGraphCutRays(*model, cloud, visibility, input_path, &options);
   MeshReport report;
   const TriangleMesh mesh = MeshPointCloud(cloud, options, &report, input_path);
   std::filesystem::create_directories(

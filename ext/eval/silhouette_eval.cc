@@ -30,19 +30,58 @@ void SilhouetteOptions::Check() const {
               supersampling);
 }
 
+namespace {
+
+// Clutter: the pixels of the object region's parts (8-connected) that the
+// model's silhouette does not touch at all.
+double ClutterPixels(const cv::Mat& object, const cv::Mat& model) {
+  cv::Mat labels, stats, centroids;
+  const int num_labels =
+      cv::connectedComponentsWithStats(object, labels, stats, centroids, 8);
+  std::vector<bool> touched(num_labels, false);
+  for (int y = 0; y < labels.rows; ++y) {
+    const int* label = labels.ptr<int>(y);
+    const uint8_t* covered = model.ptr<uint8_t>(y);
+    for (int x = 0; x < labels.cols; ++x) {
+      if (covered[x] != 0) touched[label[x]] = true;
+    }
+  }
+  double clutter = 0;
+  for (int l = 1; l < num_labels; ++l) {
+    if (!touched[l]) clutter += stats.at<int>(l, cv::CC_STAT_AREA);
+  }
+  return clutter;
+}
+
+}  // namespace
+
 SilhouetteEvaluation EvaluateSilhouettes(const TriangleMesh& mesh,
                                          const Scene& scene,
                                          const std::string& image_path,
                                          const SilhouetteOptions& options) {
   options.Check();
   if (mesh.faces.empty()) ThrowInputError("silhouettes: the mesh has no faces");
-  // Read every photograph first: a missing one stops before any rendering.
-  std::vector<std::pair<const Image*, cv::Mat>> photographs;
+  // Every photograph's size from its header first: a missing one, or one
+  // of another size than its camera, stops before any rendering; the pixels
+  // are read one photograph at a time.
+  const auto path_of = [&](const Image& image) {
+    return (fs::path(image_path) / image.name).string();
+  };
   for (const auto& [image_id, image] : scene.images) {
-    photographs.emplace_back(
-        &image,
-        ReadImage((fs::path(image_path) / image.name).string(),
-                  ImageReadMode::kGray));
+    const ImageSize size = ReadImageSize(path_of(image));
+    const Camera& camera = scene.cameras.at(image.camera_id);
+    if (static_cast<uint64_t>(size.width) != camera.width ||
+        static_cast<uint64_t>(size.height) != camera.height) {
+      ThrowInputError(path_of(image),
+                      ": ",
+                      size.width,
+                      " x ",
+                      size.height,
+                      " pixels, but its camera has ",
+                      camera.width,
+                      " x ",
+                      camera.height);
+    }
   }
   if (!options.mask_dir.empty()) fs::create_directories(options.mask_dir);
   const MeshRenderer renderer(mesh);
@@ -52,27 +91,15 @@ SilhouetteEvaluation EvaluateSilhouettes(const TriangleMesh& mesh,
   render.num_threads = options.num_threads;
   SilhouetteEvaluation evaluation;
   evaluation.min_iou = 1;
-  for (const auto& [image, photograph] : photographs) {
-    const Camera& camera = scene.cameras.at(image->camera_id);
-    if (static_cast<uint64_t>(photograph.cols) != camera.width ||
-        static_cast<uint64_t>(photograph.rows) != camera.height) {
-      ThrowInputError(image_path,
-                      "/",
-                      image->name,
-                      ": ",
-                      photograph.cols,
-                      " x ",
-                      photograph.rows,
-                      " pixels, but its camera has ",
-                      camera.width,
-                      " x ",
-                      camera.height);
-    }
+  for (const auto& [image_id, image] : scene.images) {
     RenderView view;
-    view.camera = camera;
-    view.cam_from_world = image->cam_from_world;
-    view.frame = image->frame;
+    view.camera = scene.cameras.at(image.camera_id);
+    view.cam_from_world = image.cam_from_world;
+    view.frame = image.frame;
     const RenderResult rendered = renderer.Render(view, Lighting(), render);
+    // OpenCV's own grey conversion (ReadImageGrayFloat's luminance would
+    // move pixels at the threshold).
+    const cv::Mat photograph = ReadImage(path_of(image), ImageReadMode::kGray);
     cv::Mat grey;
     photograph.convertTo(
         grey, CV_32F, photograph.depth() == CV_16U ? 1.0 / 257 : 1.0);
@@ -82,31 +109,13 @@ SilhouetteEvaluation EvaluateSilhouettes(const TriangleMesh& mesh,
     const double model_only = cv::countNonZero(model & ~object);
     const double photograph_only = cv::countNonZero(object & ~model);
     const double united = both + model_only + photograph_only;
-    // Clutter: the object region's parts the model does not touch.
-    cv::Mat labels;
-    const int num_labels = cv::connectedComponents(object, labels, 8, CV_32S);
-    std::vector<bool> touched(num_labels, false);
-    for (int y = 0; y < labels.rows; ++y) {
-      const int* label = labels.ptr<int>(y);
-      const uint8_t* covered = model.ptr<uint8_t>(y);
-      for (int x = 0; x < labels.cols; ++x) {
-        if (covered[x] != 0) touched[label[x]] = true;
-      }
-    }
-    double clutter = 0;
-    std::vector<int> sizes(num_labels, 0);
-    for (int y = 0; y < labels.rows; ++y) {
-      const int* label = labels.ptr<int>(y);
-      for (int x = 0; x < labels.cols; ++x) ++sizes[label[x]];
-    }
-    for (int l = 1; l < num_labels; ++l) {
-      if (!touched[l]) clutter += sizes[l];
-    }
     const double object_pixels = both + photograph_only;
     SilhouetteView& result = evaluation.views.emplace_back();
     result.best_iou =
-        object_pixels > 0 ? (object_pixels - clutter) / object_pixels : 0;
-    result.name = image->name;
+        object_pixels > 0
+            ? (object_pixels - ClutterPixels(object, model)) / object_pixels
+            : 0;
+    result.name = image.name;
     result.iou = united > 0 ? both / united : 0;
     result.model_only = united > 0 ? model_only / united : 0;
     result.photograph_only = united > 0 ? photograph_only / united : 0;
@@ -122,7 +131,7 @@ SilhouetteEvaluation EvaluateSilhouettes(const TriangleMesh& mesh,
       mask.setTo(cv::Scalar(255, 255, 255), object & model);
       mask.setTo(cv::Scalar(0, 0, 255), model & ~object);
       mask.setTo(cv::Scalar(255, 0, 0), object & ~model);
-      std::string stem = fs::path(image->name).stem().string();
+      std::string stem = fs::path(image.name).stem().string();
       std::replace(stem.begin(), stem.end(), '/', '_');
       WriteImage((fs::path(options.mask_dir) / (stem + ".png")).string(), mask);
     }

@@ -8,6 +8,7 @@
 #include <glog/logging.h>
 
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 namespace bayon {
@@ -150,6 +151,43 @@ std::string MeshReport::Summary() const {
       << seconds_normals << " s, " << MeshMethodName(method) << " "
       << seconds_method << " s, cleanup " << seconds_cleanup << " s";
   return out.str();
+}
+
+void SetGraphCutRays(const Scene& model,
+                     const PointCloud& cloud,
+                     const std::vector<std::vector<uint32_t>>& visibility,
+                     const std::string& what,
+                     MeshOptions* options) {
+  options->stations.clear();
+  options->point_stations.clear();
+  std::map<image_t, int> index_of;
+  for (const auto& [image_id, image] : model.images) {
+    index_of[image_id] = static_cast<int>(options->stations.size());
+    options->stations.push_back(image.cam_from_world.Center());
+  }
+  if (!visibility.empty()) {
+    for (const std::vector<uint32_t>& seen : visibility) {
+      options->point_stations.emplace_back(seen.begin(), seen.end());
+    }
+    return;
+  }
+  const PointAttribute* master = cloud.FindAttribute("master_id");
+  if (master == nullptr) {
+    ThrowInputError(what,
+                    ": delaunay_graph_cut needs the images that saw each "
+                    "point: a .vis beside it (--visibility_path) or the "
+                    "master_id attribute of bayon dense's clouds");
+  }
+  for (double id : master->values) {
+    const auto it = index_of.find(static_cast<image_t>(id));
+    if (it == index_of.end()) {
+      ThrowInputError(what,
+                      ": a point's master_id ",
+                      static_cast<int64_t>(id),
+                      " is no image of the oriented model");
+    }
+    options->point_stations.push_back({it->second});
+  }
 }
 
 TriangleMesh MeshPointCloud(const PointCloud& input,

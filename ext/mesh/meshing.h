@@ -34,6 +34,7 @@
 
 #include "ext/core/mesh_geometry.h"
 #include "ext/core/point_cloud.h"
+#include "ext/core/scene.h"
 #include "ext/mesh/cylinder_mesher.h"
 #include "ext/mesh/mesh_cleanup.h"
 #include "ext/mesh/normals.h"
@@ -195,6 +196,18 @@ TriangleMesh DelaunayGraphCutMesh(
 TriangleMesh ColmapPoissonMesh(const PointCloud& cloud,
                                const ColmapPoissonOptions& options,
                                int num_threads);
+
+// delaunay_graph_cut's rays into `options`: the projection centres of
+// `model`'s images (in the order of its images file, as a fused.ply.vis
+// indexes them) and per point of `cloud` the images that saw it, from
+// `visibility` (a fused.ply.vis; empty: none) or else the points' master_id
+// (bayon dense). InputError naming `what` where the cloud has neither, or
+// names an image the model lacks.
+void SetGraphCutRays(const Scene& model,
+                     const PointCloud& cloud,
+                     const std::vector<std::vector<uint32_t>>& visibility,
+                     const std::string& what,
+                     MeshOptions* options);
 
 // Checks the cloud (not empty, finite, at least 10 points, not all on one
 // line: InputError naming `what`), meshes it, cleans the mesh and returns
