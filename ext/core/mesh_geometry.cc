@@ -77,6 +77,12 @@ Eigen::Vector3d FaceNormal(const TriangleMesh& mesh, int face) {
   return norm > 0 ? Eigen::Vector3d(n / norm) : Eigen::Vector3d::Zero();
 }
 
+Eigen::Vector3d Centroid(const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) sum += p;
+  return sum / static_cast<double>(std::max<size_t>(points.size(), 1));
+}
+
 std::vector<std::vector<int>> FindBoundaryLoops(const TriangleMesh& mesh) {
   const std::vector<FaceEdge> edges = SortedFaceEdges(mesh);
   // Boundary halfedges as their faces run them: a consistently oriented

@@ -83,4 +83,8 @@ std::vector<SurfaceSample> SampleMeshSurface(const TriangleMesh& mesh,
 // degenerate face.
 Eigen::Vector3d FaceNormal(const TriangleMesh& mesh, int face);
 
+// The mean of the points (zero for none): where the meshers shift a cloud
+// to, for the same numerics whatever its coordinates.
+Eigen::Vector3d Centroid(const std::vector<Eigen::Vector3d>& points);
+
 }  // namespace bayon

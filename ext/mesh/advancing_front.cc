@@ -15,9 +15,7 @@ TriangleMesh AdvancingFrontMesh(const PointCloud& cloud,
   options.Check();
   using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
   // Shifted to the centroid, as the other methods, for the same numerics.
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& p : cloud.positions) center += p;
-  center /= std::max<size_t>(cloud.size(), 1);
+  const Eigen::Vector3d center = Centroid(cloud.positions);
   std::vector<Kernel::Point_3> points;
   points.reserve(cloud.size());
   for (const Eigen::Vector3d& p : cloud.positions) {

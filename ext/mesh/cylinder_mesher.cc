@@ -3,6 +3,7 @@
 
 #include "ext/cloud/pcl_cloud.h"
 #include "ext/core/errors.h"
+#include "ext/core/mesh_geometry.h"
 #include "ext/core/parallel.h"
 
 #include <CGAL/Delaunay_triangulation_2.h>
@@ -178,9 +179,7 @@ TriangleMesh CylinderDelaunayMesh(const PointCloud& cloud,
   const Eigen::Vector3d axis = options.axis_direction.normalized();
   Eigen::Vector3d center = options.axis_point;
   if (!center.allFinite()) {
-    center.setZero();
-    for (const Eigen::Vector3d& p : cloud.positions) center += p;
-    center /= std::max<size_t>(n, 1);
+    center = Centroid(cloud.positions);
   }
   report->axis_point = center;
   report->axis_direction = axis;

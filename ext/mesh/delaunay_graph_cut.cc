@@ -254,9 +254,7 @@ TriangleMesh DelaunayGraphCutMesh(
     }
   }
   // Shifted to the centroid, as the other methods, for the same numerics.
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& p : cloud.positions) center += p;
-  center /= std::max<size_t>(cloud.size(), 1);
+  const Eigen::Vector3d center = Centroid(cloud.positions);
   std::vector<Eigen::Vector3d> positions;
   positions.reserve(cloud.size());
   for (const Eigen::Vector3d& p : cloud.positions) {

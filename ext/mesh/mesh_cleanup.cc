@@ -122,9 +122,7 @@ size_t OrientConsistently(const PointCloud& vertices,
     return false;
   };
   const auto& p = vertices.positions;
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& q : p) centroid += q;
-  centroid /= std::max<size_t>(p.size(), 1);
+  const Eigen::Vector3d centroid = Centroid(p);
 
   size_t flipped = 0;
   std::vector<int> component(num_faces, -1);
