@@ -93,6 +93,19 @@ Vertices SelectVertices(const std::vector<Eigen::Vector3d>& positions,
 // (integers: the sums of the threads' shares do not depend on their order,
 // so neither does the cut).
 struct CellGraph {
+  explicit CellGraph(int num_cells)
+      : source(num_cells, 0),
+        sink(num_cells, 0),
+        capacity(4 * static_cast<size_t>(num_cells), 0) {}
+  void Add(const CellGraph& other) {
+    for (size_t c = 0; c < source.size(); ++c) {
+      source[c] += other.source[c];
+      sink[c] += other.sink[c];
+    }
+    for (size_t k = 0; k < capacity.size(); ++k) {
+      capacity[k] += other.capacity[k];
+    }
+  }
   std::vector<int32_t> source;    // outside
   std::vector<int32_t> sink;      // inside
   std::vector<int32_t> capacity;  // 4 per cell: towards neighbour(k)
@@ -142,6 +155,33 @@ void AddRay(const Delaunay& dt,
   const Eigen::Vector3d inner = target + behind * direction;
   const Delaunay::Cell_handle cell = dt.locate(ToPoint(inner), vertex->cell());
   if (!dt.is_infinite(cell)) graph->sink[cell->info()] += 1;
+}
+
+// Every vertex's rays, in parallel over batches of vertices, each batch
+// into its own weights, summed after.
+CellGraph CastRays(const Delaunay& dt,
+                   const std::vector<Delaunay::Vertex_handle>& handles,
+                   const std::vector<std::vector<int>>& vertex_stations,
+                   const std::vector<Eigen::Vector3d>& stations,
+                   double behind,
+                   int num_cells,
+                   int num_threads) {
+  const int num_batches = std::max(1, EffectiveNumThreads(num_threads));
+  const int num_vertices = static_cast<int>(handles.size());
+  CellGraph graph(num_cells);
+  std::mutex merge;
+  ParallelFor(num_batches, num_threads, [&](int batch) {
+    CellGraph local(num_cells);
+    for (int v = batch; v < num_vertices; v += num_batches) {
+      if (handles[v] == Delaunay::Vertex_handle()) continue;  // a duplicate
+      for (int station : vertex_stations[v]) {
+        AddRay(dt, handles[v], stations[station], behind, &local);
+      }
+    }
+    const std::lock_guard<std::mutex> lock(merge);
+    graph.Add(local);
+  });
+  return graph;
 }
 
 // The minimum cut: true for the cells on the sink's side (inside).
@@ -286,36 +326,13 @@ TriangleMesh DelaunayGraphCutMesh(
     handles[v->info()] = v;
   }
 
-  // The rays, in parallel over batches of vertices, each batch into its
-  // own graph weights, summed after.
-  const double behind = options.inside_depth_factor * median_spacing;
-  const int num_batches = std::max(1, EffectiveNumThreads(num_threads));
-  CellGraph graph;
-  graph.source.assign(num_cells, 0);
-  graph.sink.assign(num_cells, 0);
-  graph.capacity.assign(4 * static_cast<size_t>(num_cells), 0);
-  std::mutex merge;
-  const int num_vertices = static_cast<int>(handles.size());
-  ParallelFor(num_batches, num_threads, [&](int batch) {
-    CellGraph local;
-    local.source.assign(num_cells, 0);
-    local.sink.assign(num_cells, 0);
-    local.capacity.assign(4 * static_cast<size_t>(num_cells), 0);
-    for (int v = batch; v < num_vertices; v += num_batches) {
-      if (handles[v] == Delaunay::Vertex_handle()) continue;  // a duplicate
-      for (int station : vertices.stations[v]) {
-        AddRay(dt, handles[v], centred_stations[station], behind, &local);
-      }
-    }
-    const std::lock_guard<std::mutex> lock(merge);
-    for (int c = 0; c < num_cells; ++c) {
-      graph.source[c] += local.source[c];
-      graph.sink[c] += local.sink[c];
-    }
-    for (size_t k = 0; k < graph.capacity.size(); ++k) {
-      graph.capacity[k] += local.capacity[k];
-    }
-  });
+  const CellGraph graph = CastRays(dt,
+                                   handles,
+                                   vertices.stations,
+                                   centred_stations,
+                                   options.inside_depth_factor * median_spacing,
+                                   num_cells,
+                                   num_threads);
   const std::vector<bool> inside = CutGraph(dt, graph);
 
   // The facets between inside and outside cells, facing outside.
@@ -369,15 +386,13 @@ TriangleMesh DelaunayGraphCutMesh(
       // no photograph showed from that side (under a ground, behind a
       // wall): left out.
       const Eigen::Vector3d centroid = (a + b + c) / 3;
-      bool seen = false;
-      for (int j = 0; j < 3 && !seen; ++j) {
-        for (int station : vertices.stations[corner[j]]) {
-          if (normal.dot(centred_stations[station] - centroid) > 0) {
-            seen = true;
-            break;
-          }
-        }
-      }
+      const auto in_front = [&](int station) {
+        return normal.dot(centred_stations[station] - centroid) > 0;
+      };
+      const bool seen = std::any_of(corner.begin(), corner.end(), [&](int v) {
+        return std::any_of(
+            vertices.stations[v].begin(), vertices.stations[v].end(), in_front);
+      });
       if (!seen) {
         ++num_unseen;
         continue;
