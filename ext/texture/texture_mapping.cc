@@ -126,6 +126,7 @@ cv::Mat Preprocess(const cv::Mat& bgr,
                    const TextureOptions& options) {
   switch (options.preprocess) {
     case TexturePreprocess::kNone:
+    case TexturePreprocess::kBalance:  // over all photographs, later
       return bgr;
     case TexturePreprocess::kHighPassEqualize:
       return HighPassEqualize(
@@ -173,12 +174,6 @@ std::vector<EdgeFace> SortedEdges(const TriangleMesh& mesh) {
   std::sort(edges.begin(), edges.end());
   return edges;
 }
-
-// An edge with exactly two faces (manifold, not on a boundary).
-struct TwoFaceEdge {
-  int a, b;  // its vertices
-  int f, g;  // its faces
-};
 
 std::vector<TwoFaceEdge> TwoFaceEdges(const std::vector<EdgeFace>& sorted) {
   std::vector<TwoFaceEdge> pairs;
@@ -241,6 +236,125 @@ bool SampleColor(const cv::Mat& image,
                  const Eigen::Vector2d& pixel,
                  Eigen::Vector3f* color) {
   return SampleBilinear(image, pixel.x(), pixel.y(), color);
+}
+
+// A photograph blended into a face: its colours, the face's corners in it,
+// and its weight (projected area over the largest, equation 7).
+struct BlendSource {
+  const cv::Mat* bgr;
+  Eigen::Vector2d p[3];
+  float weight;
+};
+
+// The photographs whose colours a face takes: all that see it, or with
+// `blend = kNone` only its chart's image.
+std::vector<BlendSource> BlendSources(const TriangleMesh& mesh,
+                                      int face,
+                                      const std::vector<FaceView>& views,
+                                      int chart_image,
+                                      float best_area,
+                                      const std::vector<TextureImage>& images,
+                                      const std::vector<cv::Mat>& colors,
+                                      const TextureOptions& options) {
+  std::vector<BlendSource> sources;
+  for (const FaceView& v : views) {
+    if (options.blend == TextureBlend::kNone && v.image != chart_image) {
+      continue;
+    }
+    BlendSource s;
+    s.bgr = &colors[v.image];
+    if (!ProjectFace(mesh, face, images[v.image], s.p)) continue;
+    s.weight = v.area_px / best_area;
+    sources.push_back(s);
+  }
+  return sources;
+}
+
+// The weighted mean colour at barycentric coordinates `b` (the affine map
+// fixed by the three corners carries the point into each photograph,
+// equations 6 and 7); false where no photograph has it.
+bool BlendAt(const std::vector<BlendSource>& sources,
+             const Eigen::Vector3d& b,
+             Eigen::Vector3f* color) {
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  float weight = 0;
+  for (const BlendSource& s : sources) {
+    Eigen::Vector3f c;
+    if (SampleColor(
+            *s.bgr, b[0] * s.p[0] + b[1] * s.p[1] + b[2] * s.p[2], &c)) {
+      sum += s.weight * c;
+      weight += s.weight;
+    }
+  }
+  if (weight <= 0) return false;
+  *color = sum / weight;
+  return true;
+}
+
+// A face's mean colour in a photograph: seven points spread over it.
+bool FaceMeanColor(const TriangleMesh& mesh,
+                   int face,
+                   const TextureImage& image,
+                   Eigen::Vector3f* color) {
+  Eigen::Vector2d p[3];
+  if (!ProjectFace(mesh, face, image, p)) return false;
+  static const double kPoints[7][3] = {{1 / 3.0, 1 / 3.0, 1 / 3.0},
+                                       {0.6, 0.2, 0.2},
+                                       {0.2, 0.6, 0.2},
+                                       {0.2, 0.2, 0.6},
+                                       {0.1, 0.45, 0.45},
+                                       {0.45, 0.1, 0.45},
+                                       {0.45, 0.45, 0.1}};
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  for (const auto& b : kPoints) {
+    Eigen::Vector3f c;
+    if (!SampleColor(image.bgr, b[0] * p[0] + b[1] * p[1] + b[2] * p[2], &c)) {
+      return false;
+    }
+    sum += c;
+  }
+  *color = sum / 7.0f;
+  return true;
+}
+
+// A face smaller than this in a photograph (pixels) is too few samples for
+// the exposure balance.
+constexpr float kMinBalanceArea = 10.0f;
+
+// The photographs with their exposures and white balances balanced over
+// their overlaps (color_balance.h).
+std::vector<cv::Mat> BalancedColors(
+    const TriangleMesh& mesh,
+    const std::vector<std::vector<FaceView>>& views,
+    const std::vector<TextureImage>& images,
+    const TextureOptions& options,
+    TextureReport* report) {
+  const int num_faces = static_cast<int>(mesh.NumFaces());
+  std::vector<std::vector<FaceColor>> face_colors(num_faces);
+  ParallelFor(num_faces, options.num_threads, [&](int face) {
+    if (views[face].size() < 2) return;
+    for (const FaceView& v : views[face]) {
+      FaceColor c;
+      c.image = v.image;
+      if (v.area_px >= kMinBalanceArea &&
+          FaceMeanColor(mesh, face, images[v.image], &c.color)) {
+        face_colors[face].push_back(c);
+      }
+    }
+  });
+  const std::vector<GainOffset> corrections =
+      BalanceExposures(face_colors,
+                       static_cast<int>(images.size()),
+                       ColorBalanceOptions(),
+                       &report->balance);
+  std::vector<cv::Mat> colors(images.size());
+  ParallelFor(static_cast<int>(images.size()), options.num_threads, [&](int j) {
+    colors[j] = ApplyGainOffset(images[j].bgr, corrections[j]);
+  });
+  for (size_t j = 0; j < images.size(); ++j) {
+    report->corrections[images[j].name] = corrections[j];
+  }
+  return colors;
 }
 
 // Each face no photograph sees has a cell of this many texels square in the
@@ -366,6 +480,8 @@ const char* TexturePreprocessName(TexturePreprocess preprocess) {
   switch (preprocess) {
     case TexturePreprocess::kNone:
       return "none";
+    case TexturePreprocess::kBalance:
+      return "balance";
     case TexturePreprocess::kHighPassEqualize:
       return "highpass_equalize";
     case TexturePreprocess::kWallis:
@@ -376,13 +492,14 @@ const char* TexturePreprocessName(TexturePreprocess preprocess) {
 
 TexturePreprocess ParseTexturePreprocess(const std::string& name) {
   for (TexturePreprocess p : {TexturePreprocess::kNone,
+                              TexturePreprocess::kBalance,
                               TexturePreprocess::kHighPassEqualize,
                               TexturePreprocess::kWallis}) {
     if (name == TexturePreprocessName(p)) return p;
   }
   ThrowInputError("--preprocess: unknown '",
                   name,
-                  "' (expected none, highpass_equalize or wallis)");
+                  "' (expected balance, highpass_equalize, wallis or none)");
 }
 
 const char* TextureBlendName(TextureBlend blend) {
@@ -420,8 +537,22 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
                                             const std::string& image_path,
                                             const TextureOptions& options) {
   options.Check();
+  for (const std::string& name : options.exclude_images) {
+    if (!std::any_of(scene.images.begin(),
+                     scene.images.end(),
+                     [&](const auto& id_image) {
+                       return id_image.second.name == name;
+                     })) {
+      ThrowInputError("--exclude_images: the model has no image '", name, "'");
+    }
+  }
   std::vector<TextureImage> images;
   for (const auto& [image_id, image] : scene.images) {
+    if (std::find(options.exclude_images.begin(),
+                  options.exclude_images.end(),
+                  image.name) != options.exclude_images.end()) {
+      continue;
+    }
     TextureImage t;
     t.name = image.name;
     if (!scene.cameras.contains(image.camera_id)) {
@@ -435,7 +566,11 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
     t.image = &image;
     images.push_back(t);
   }
-  if (images.empty()) ThrowInputError("the model has no images");
+  if (images.empty()) {
+    ThrowInputError(options.exclude_images.empty()
+                        ? "the model has no images"
+                        : "--exclude_images leaves no image");
+  }
   Progress progress("loading", images.size(), "images");
   ParallelFor(static_cast<int>(images.size()), options.num_threads, [&](int i) {
     TextureImage& t = images[i];
@@ -504,6 +639,11 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     progress.Finish();
   }
   report.seconds_visibility = timer.Seconds() - report.seconds_preprocess;
+  if (options.preprocess == TexturePreprocess::kBalance) {
+    Timer balance;
+    colors = BalancedColors(mesh, views, images, options, &report);
+    report.seconds_preprocess += balance.Seconds();
+  }
   timer = Timer();
 
   // 3. The optimal image of each face.
@@ -638,6 +778,39 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     charts[chart_of_root[root]].faces.push_back(face);
   }
   report.num_charts = static_cast<int>(charts.size());
+  std::vector<int> chart_of_face(num_faces, -1);
+  for (size_t c = 0; c < charts.size(); ++c) {
+    for (int face : charts[c].faces) chart_of_face[face] = static_cast<int>(c);
+  }
+
+  // 6. Seam levelling: corner adjustments from the colours the faces would
+  // take on both sides of each chart border.
+  auto face_sources = [&](int face) {
+    return BlendSources(mesh,
+                        face,
+                        views[face],
+                        source[face],
+                        best_area[face],
+                        images,
+                        colors,
+                        options);
+  };
+  std::vector<std::array<Eigen::Vector3f, 3>> corner_adjustment(
+      num_faces,
+      {Eigen::Vector3f::Zero(),
+       Eigen::Vector3f::Zero(),
+       Eigen::Vector3f::Zero()});
+  if (options.seam_leveling) {
+    corner_adjustment = LevelSeams(
+        mesh,
+        chart_of_face,
+        two_face_edges,
+        [&](int face, const Eigen::Vector3d& b, Eigen::Vector3f* color) {
+          return BlendAt(face_sources(face), b, color);
+        },
+        SeamLevelingOptions(),
+        &report.seam_leveling);
+  }
 
   // Projected corners of every face in its optimal image.
   std::vector<std::array<Eigen::Vector2d, 3>> corners(num_faces);
@@ -764,23 +937,8 @@ TexturedMesh MapTexture(const TriangleMesh& input,
             pass == 0 ? 0.0 : (t[2] - t[1]).norm() / std::abs(det),
             pass == 0 ? 0.0 : (t[2] - t[0]).norm() / std::abs(det),
             pass == 0 ? 0.0 : (t[1] - t[0]).norm() / std::abs(det)};
-        // The face's corners in every photograph that blends into it.
-        struct Source {
-          const cv::Mat* bgr;
-          Eigen::Vector2d p[3];
-          float weight;
-        };
-        std::vector<Source> sources;
-        for (const FaceView& v : views[face]) {
-          if (options.blend == TextureBlend::kNone && v.image != source[face]) {
-            continue;
-          }
-          Source s;
-          s.bgr = &colors[v.image];
-          if (!ProjectFace(mesh, face, images[v.image], s.p)) continue;
-          s.weight = v.area_px / best_area[face];
-          sources.push_back(s);
-        }
+        const std::vector<BlendSource> sources = face_sources(face);
+        const auto& adjust = corner_adjustment[face];
         // Clamped to the chart's own rectangle: charts are filled in
         // parallel and must not touch each other's texels.
         const int cx0 = static_cast<int>(chart.offset.x());
@@ -812,23 +970,13 @@ TexturedMesh MapTexture(const TriangleMesh& input,
             }
             uint8_t& mark = covered.at<uint8_t>(y, x);
             if (pass == 1 && mark) continue;
-            // The affine map fixed by the three corners carries the
-            // texel into each photograph (equations 6 and 7).
-            Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-            float weight = 0;
-            for (const Source& s : sources) {
-              Eigen::Vector3f color;
-              if (SampleColor(*s.bgr,
-                              b0 * s.p[0] + b1 * s.p[1] + b2 * s.p[2],
-                              &color)) {
-                sum += s.weight * color;
-                weight += s.weight;
-              }
-            }
+            Eigen::Vector3f color;
             cv::Vec3b& out = atlas.at<cv::Vec3b>(y, x);
-            if (weight > 0) {
+            if (BlendAt(sources, Eigen::Vector3d(b0, b1, b2), &color)) {
+              color += float(b0) * adjust[0] + float(b1) * adjust[1] +
+                       float(b2) * adjust[2];
               for (int ch = 0; ch < 3; ++ch) {
-                out[ch] = cv::saturate_cast<uint8_t>(sum[ch] / weight);
+                out[ch] = cv::saturate_cast<uint8_t>(color[ch]);
               }
             } else {
               out = options.unseen_bgr;
@@ -894,7 +1042,18 @@ std::string TextureSummary(const TextureReport& r) {
       << " x " << r.atlas_height << " atlas (texel " << r.texel_size * 1000
       << " mm, " << 100 * r.atlas_fill
       << " % filled); seams: " << r.num_seam_edges << " edges, mean difference "
-      << r.seam_difference << " grey levels; "
+      << r.seam_difference << " grey levels";
+  if (r.balance.num_pairs > 0) {
+    out << "; exposure balance over " << r.balance.num_faces
+        << " faces: overlap differences " << r.balance.sigma_before << " -> "
+        << r.balance.sigma_after << " grey levels (robust sigma)";
+  }
+  if (r.seam_leveling.num_seam_edges > 0) {
+    out << "; seam levelling: border differences "
+        << r.seam_leveling.difference_before << " -> "
+        << r.seam_leveling.difference_after << " grey levels";
+  }
+  out << "; "
       << r.seconds_load + r.seconds_preprocess + r.seconds_visibility +
              r.seconds_atlas
       << " s";

@@ -4,11 +4,14 @@
 // the oriented photographs give a texture atlas and per-corner texture
 // coordinates.
 //
-// 1. Pre-processing of every photograph (ext/image/radiometry.h): high pass
-//    and histogram equalisation per channel (default), a Wallis filter, or
-//    none; equalisation counts only the pixels the mesh covers, so that a
-//    dark background does not wash the object out. The photographs on disk
-//    are never changed.
+// 1. Pre-processing of every photograph: by default the photographs'
+//    exposures and white balances are balanced (a gain and offset per
+//    photograph and channel, solved over their overlaps; color_balance.h),
+//    which keeps the object's colours. The paper's high pass and histogram
+//    equalisation per channel (ext/image/radiometry.h; equalisation counts
+//    only the pixels the mesh covers, so that a dark background does not
+//    wash the object out), a Wallis filter, or none are the alternatives.
+//    The photographs on disk are never changed.
 // 2. Visibility of every triangle in every photograph: the mesh rendered
 //    through the photograph's camera (ext/render, the full camera model
 //    with distortion) gives a depth map; a triangle is seen when its
@@ -34,6 +37,10 @@
 //    `blend = kNone` only the chart's image is used (for comparison): the
 //    optimal image, or its neighbours' where step 4 merged the face.
 //
+// 6. Seam levelling (`seam_leveling`, color_balance.h): an additive colour
+//    per vertex and chart, interpolated over each face, levels what is left
+//    at the chart borders.
+//
 // Texel size: `texel_size` metres, or by default the median ground sampling
 // distance of the triangles in their optimal images, so that the atlas keeps
 // the photographs' resolution where most of the model is seen.
@@ -47,6 +54,7 @@
 
 #include "ext/core/point_cloud.h"
 #include "ext/core/scene.h"
+#include "ext/texture/color_balance.h"
 
 #include <opencv2/core.hpp>
 
@@ -56,7 +64,7 @@
 
 namespace bayon {
 
-enum class TexturePreprocess { kNone, kHighPassEqualize, kWallis };
+enum class TexturePreprocess { kNone, kBalance, kHighPassEqualize, kWallis };
 enum class TextureBlend { kNone, kViewDependent };
 
 const char* TexturePreprocessName(TexturePreprocess preprocess);
@@ -66,10 +74,13 @@ const char* TextureBlendName(TextureBlend blend);
 TextureBlend ParseTextureBlend(const std::string& name);
 
 struct TextureOptions {
-  TexturePreprocess preprocess = TexturePreprocess::kHighPassEqualize;
+  TexturePreprocess preprocess = TexturePreprocess::kBalance;
   // High-pass radius and Wallis window (Gaussian sigma), pixels.
   double filter_radius_px = 50;
   TextureBlend blend = TextureBlend::kViewDependent;
+  bool seam_leveling = true;
+  // Photographs not to texture from, by name (for leaving one out).
+  std::vector<std::string> exclude_images;
   // A face is drawn in the image most of its edge neighbours are drawn in
   // when that image sees it with at least this share of its largest
   // projected area (fewer, larger charts); 1: always its optimal image.
@@ -115,7 +126,12 @@ struct TextureReport {
   std::map<std::string, int> faces_per_image;
   int num_seam_edges = 0;
   double seam_difference = 0;  // mean absolute, 8-bit grey levels
-  double seconds_load = 0;     // reading the photographs (the caller's)
+  // With --preprocess balance: every photograph's correction, by name,
+  // and the overlaps' differences before and after.
+  std::map<std::string, GainOffset> corrections;
+  ColorBalanceReport balance;
+  SeamLevelingReport seam_leveling;  // with seam_leveling
+  double seconds_load = 0;           // reading the photographs (the caller's)
   double seconds_preprocess = 0;
   double seconds_visibility = 0;
   double seconds_atlas = 0;
@@ -127,9 +143,9 @@ struct TexturedMesh {
   TextureReport report;
 };
 
-// Loads the scene's images from `image_path` (by name). Throws InputError
-// naming a missing or unreadable image or one whose size differs from its
-// camera's.
+// Loads the scene's images from `image_path` (by name) but those excluded.
+// Throws InputError naming a missing or unreadable image or one whose size
+// differs from its camera's, or an excluded name the scene does not have.
 std::vector<TextureImage> LoadTextureImages(const Scene& scene,
                                             const std::string& image_path,
                                             const TextureOptions& options);

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include <iostream>
 #include <random>
 
 namespace bayon {
@@ -90,10 +91,12 @@ Rigid3d Station(double azimuth_deg, double height) {
                 Eigen::Vector3d(0, 0, 0.5));
 }
 
+// The photograph's exposure and white balance: `exposure` applied to the
+// 8-bit colours.
 cv::Mat RenderBgr8(const MeshRenderer& renderer,
                    const Camera& camera,
                    const Rigid3d& pose,
-                   float gain) {
+                   const GainOffset& exposure = GainOffset()) {
   RenderView view;
   view.camera = camera;
   view.cam_from_world = pose;
@@ -101,11 +104,11 @@ cv::Mat RenderBgr8(const MeshRenderer& renderer,
   options.supersampling = 2;
   cv::Mat color = renderer.Render(view, Lighting(), options).color;
   cv::Mat bgr8;
-  color.convertTo(bgr8, CV_8UC3, 255.0 * gain);
-  return bgr8;
+  color.convertTo(bgr8, CV_8UC3, 255.0);
+  return ApplyGainOffset(bgr8, exposure);
 }
 
-BoxScene MakeBoxScene(const std::vector<float>& gains) {
+BoxScene MakeBoxScene(const std::vector<GainOffset>& exposures) {
   BoxScene scene;
   scene.truth = TexturedBox(12);
   scene.truth_texture = RandomTexture(6 * 128, 128, 7);
@@ -115,18 +118,27 @@ BoxScene MakeBoxScene(const std::vector<float>& gains) {
   camera_options.pixel_pitch_mm = 0.06;
   scene.camera = SyntheticCamera(camera_options);
   const MeshRenderer renderer(scene.truth, scene.truth_texture);
-  for (size_t i = 0; i < gains.size(); ++i) {
+  for (size_t i = 0; i < exposures.size(); ++i) {
     Image image;
     image.image_id = static_cast<image_t>(i + 1);
     image.name = "image_" + std::to_string(i) + ".png";
     image.camera_id = scene.camera.camera_id;
     image.cam_from_world = Station(10 + 45.0 * i, 1.6);
     scene.photographs.push_back(
-        RenderBgr8(renderer, scene.camera, image.cam_from_world, gains[i]));
+        RenderBgr8(renderer, scene.camera, image.cam_from_world, exposures[i]));
     scene.images.push_back(image);
   }
   scene.heldout = {Station(32, 1.2), Station(190, 2.0)};
   return scene;
+}
+
+// Exposures differing by a gain alone.
+BoxScene MakeBoxScene(const std::vector<float>& gains) {
+  std::vector<GainOffset> exposures(gains.size());
+  for (size_t i = 0; i < gains.size(); ++i) {
+    exposures[i].gain.setConstant(gains[i]);
+  }
+  return MakeBoxScene(exposures);
 }
 
 std::vector<TextureImage> Photographs(const BoxScene& scene) {
@@ -154,8 +166,8 @@ double HeldoutPsnr(const BoxScene& scene, const TexturedMesh& model) {
   const MeshRenderer rendered(model.mesh, model.atlas);
   double sum = 0;
   for (const Rigid3d& pose : scene.heldout) {
-    cv::Mat a = RenderBgr8(truth, scene.camera, pose, 1.0f);
-    cv::Mat b = RenderBgr8(rendered, scene.camera, pose, 1.0f);
+    cv::Mat a = RenderBgr8(truth, scene.camera, pose);
+    cv::Mat b = RenderBgr8(rendered, scene.camera, pose);
     sum += cv::PSNR(a, b);
   }
   return sum / scene.heldout.size();
@@ -205,6 +217,71 @@ TEST(TextureMapping, BlendingHidesTheSeamsOfDifferentExposures) {
   EXPECT_LT(blended.report.seam_difference, 0.7 * single.report.seam_difference)
       << "single: " << TextureSummary(single.report)
       << "\nblended: " << TextureSummary(blended.report);
+}
+
+// Eight photographs, each with its own exposure and white balance (gains
+// and offsets per channel whose means are 1 and 0): the balance brings the
+// texture back to the true colours, which neither the photographs as they
+// are nor the paper's equalisation give.
+TEST(TextureMapping, BalanceRestoresTheTrueColours) {
+  const float gains[8][3] = {{0.80f, 0.95f, 1.10f},
+                             {1.15f, 1.05f, 0.90f},
+                             {0.90f, 1.20f, 1.00f},
+                             {1.10f, 0.85f, 1.05f},
+                             {0.85f, 1.00f, 0.80f},
+                             {1.20f, 1.10f, 1.15f},
+                             {0.95f, 0.80f, 0.95f},
+                             {1.05f, 1.05f, 1.05f}};
+  const float offsets[8] = {8, -6, 4, -10, 10, -4, 2, -4};
+  std::vector<GainOffset> exposures(8);
+  for (int i = 0; i < 8; ++i) {
+    exposures[i].gain = Eigen::Vector3f(gains[i][0], gains[i][1], gains[i][2]);
+    exposures[i].offset.setConstant(offsets[i]);
+  }
+  const BoxScene scene = MakeBoxScene(exposures);
+  auto texture = [&](TexturePreprocess preprocess,
+                     bool seam_leveling,
+                     TextureBlend blend = TextureBlend::kViewDependent) {
+    TextureOptions options;
+    options.preprocess = preprocess;
+    options.seam_leveling = seam_leveling;
+    options.blend = blend;
+    return MapTexture(Untextured(scene.truth), Photographs(scene), options);
+  };
+  const TexturedMesh as_taken = texture(TexturePreprocess::kNone, false);
+  const TexturedMesh paper =
+      texture(TexturePreprocess::kHighPassEqualize, false);
+  const TexturedMesh balanced = texture(TexturePreprocess::kBalance, false);
+  const TexturedMesh leveled = texture(TexturePreprocess::kBalance, true);
+  const double psnr_as_taken = HeldoutPsnr(scene, as_taken);
+  const double psnr_paper = HeldoutPsnr(scene, paper);
+  const double psnr_balanced = HeldoutPsnr(scene, balanced);
+  const double psnr_leveled = HeldoutPsnr(scene, leveled);
+  std::cout << "held-out PSNR: as taken " << psnr_as_taken << ", paper "
+            << psnr_paper << ", balanced " << psnr_balanced
+            << ", balanced and levelled " << psnr_leveled << " dB\n"
+            << TextureSummary(leveled.report) << "\n";
+  EXPECT_GT(psnr_balanced, psnr_as_taken + 3.0);
+  EXPECT_GT(psnr_balanced, psnr_paper + 3.0);
+  EXPECT_GT(psnr_leveled, psnr_as_taken + 3.0);
+  EXPECT_LT(leveled.report.balance.sigma_after,
+            0.3 * leveled.report.balance.sigma_before);
+  // The seams of charts drawn from one photograph each.
+  const TexturedMesh single =
+      texture(TexturePreprocess::kNone, false, TextureBlend::kNone);
+  const TexturedMesh single_leveled =
+      texture(TexturePreprocess::kBalance, true, TextureBlend::kNone);
+  std::cout << "seams of single photographs: as taken "
+            << single.report.seam_difference << ", balanced and levelled "
+            << single_leveled.report.seam_difference << " grey levels\n";
+  EXPECT_LT(single_leveled.report.seam_difference,
+            0.5 * single.report.seam_difference);
+  // Every photograph's correction undoes its exposure up to the common
+  // mean: gain_j * exposure_j is about the same for all.
+  for (int i = 0; i < 8; ++i) {
+    const GainOffset& c = leveled.report.corrections.at(scene.images[i].name);
+    EXPECT_NEAR(c.gain.x() * gains[i][0], 1.0, 0.08) << i;
+  }
 }
 
 TEST(TextureMapping, UnseenFacesTakeTheColoursAroundThem) {
