@@ -247,6 +247,23 @@ void ReadSynthDescription(const std::string& path,
   }
 }
 
+Json TextureToJson(const TextureEvaluation& e) {
+  Json json = {{"mean_psnr_db", e.mean_psnr_db},
+               {"mean_ssim", e.mean_ssim},
+               {"mean_normalized_psnr_db", e.mean_normalized_psnr_db},
+               {"mean_normalized_ssim", e.mean_normalized_ssim}};
+  json["views"] = Json::array();
+  for (const ViewComparison& v : e.views) {
+    json["views"].push_back({{"name", v.name},
+                             {"pixels", v.raw.num_pixels},
+                             {"psnr_db", v.raw.psnr_db},
+                             {"ssim", v.raw.ssim},
+                             {"normalized_psnr_db", v.normalized.psnr_db},
+                             {"normalized_ssim", v.normalized.ssim}});
+  }
+  return json;
+}
+
 // The triangles of several meshes in one (positions and faces only).
 TriangleMesh MergedGeometry(const std::vector<const TriangleMesh*>& meshes) {
   TriangleMesh merged;
@@ -269,6 +286,71 @@ void Transform(const Sim3d& b_from_a, PointCloud* cloud) {
   }
 }
 
+// A textured model (PLY with texture coordinates and its atlas, or with
+// vertex colours); `texture_path` defaults to the PLY's TextureFile.
+TriangleMesh ReadTexturedModel(const std::string& path,
+                               std::string texture_path,
+                               cv::Mat* texture) {
+  TriangleMesh model = ReadMeshPly(path);
+  if (texture_path.empty()) texture_path = PlyTextureFile(path);
+  if (model.HasTexcoords()) {
+    if (texture_path.empty()) {
+      ThrowInputError(path,
+                      ": has texture coordinates but names no TextureFile "
+                      "(give --texture_path)");
+    }
+    *texture = ReadImage(texture_path, ImageReadMode::kColor);
+  } else if (!model.vertices.HasColors()) {
+    ThrowInputError(path,
+                    ": has neither texture coordinates nor vertex colours");
+  }
+  return model;
+}
+
+// Leave one out: the textured model from the stations of photographs it was
+// not made from, against those photographs.
+int EvaluateAgainstPhotographs(const std::string& textured_mesh_path,
+                               const std::string& texture_path,
+                               const std::string& input_path,
+                               const std::string& image_path,
+                               const std::vector<std::string>& image_names,
+                               const TextureEvaluationOptions& options,
+                               const std::string& output_path) {
+  if (textured_mesh_path.empty() || input_path.empty() || image_names.empty()) {
+    ThrowInputError(
+        "--image_path needs the textured model (--textured_mesh_path), the "
+        "model whose cameras took the photographs (--input_path) and the "
+        "photographs to compare with (--image_names)");
+  }
+  CheckFileExists(textured_mesh_path, "--textured_mesh_path");
+  const Scene scene = ReadOrientedModel(input_path, "");
+  std::vector<std::pair<std::string, cv::Mat>> photographs;
+  for (const std::string& name : image_names) {
+    if (scene.FindImageByName(name) == nullptr) {
+      ThrowInputError("--image_names: the model has no image '", name, "'");
+    }
+    cv::Mat bgr = ReadImage(image_path + "/" + name, ImageReadMode::kColor);
+    if (bgr.depth() == CV_16U) bgr.convertTo(bgr, CV_8U, 1.0 / 257.0);
+    photographs.emplace_back(name, bgr);
+  }
+  cv::Mat texture;
+  const TriangleMesh model =
+      ReadTexturedModel(textured_mesh_path, texture_path, &texture);
+  const TextureEvaluation e = bayon::EvaluateAgainstPhotographs(
+      model, texture, scene, photographs, options);
+  std::printf("textured model against photographs:\n%s",
+              TextureTable(e).c_str());
+  Json report;
+  report["textured_mesh_path"] = textured_mesh_path;
+  report["input_path"] = input_path;
+  report["image_path"] = image_path;
+  report["photographs"] = TextureToJson(e);
+  if (!output_path.empty()) {
+    WriteFileAtomically(output_path, report.dump(2) + "\n");
+  }
+  return 0;
+}
+
 }  // namespace
 
 int RunEvaluate(int argc, char** argv) {
@@ -282,7 +364,8 @@ int RunEvaluate(int argc, char** argv) {
   // as much a blunder as an injected one.
   double off_surface_m = 0.01;
   int num_samples = 200000, num_threads = -1;
-  std::string silhouette_image_path;
+  std::string silhouette_image_path, image_path;
+  std::vector<std::string> image_names;
   SilhouetteOptions silhouette;
   CommandLine command(
       "evaluate",
@@ -367,6 +450,13 @@ int RunEvaluate(int argc, char** argv) {
                  silhouette.mask_dir,
                  "Silhouettes: write the masks here (white both, red model "
                  "only, blue photograph only)");
+  app.add_option("--image_path",
+                 image_path,
+                 "Photographs the textured model (--textured_mesh_path) was "
+                 "not made from (leave one out): it is rendered through "
+                 "their cameras (--input_path) and compared with them");
+  app.add_option("--image_names", image_names, "Those photographs' names")
+      ->delimiter(',');
   app.add_option("--output_path", output_path, "Write the report as JSON here");
   app.add_option(
       "--align", align, "1: fit a similarity first; 0: both share a datum");
@@ -374,6 +464,18 @@ int RunEvaluate(int argc, char** argv) {
   app.add_option("--num_threads", num_threads, "Threads (-1: all cores)");
   if (!command.Parse(argc, argv)) return 0;
 
+  if (!image_path.empty()) {
+    TextureEvaluationOptions options;
+    options.num_threads = num_threads;
+    options.render_dir = render_path;
+    return EvaluateAgainstPhotographs(textured_mesh_path,
+                                      texture_path,
+                                      input_path,
+                                      image_path,
+                                      image_names,
+                                      options,
+                                      output_path);
+  }
   if (!silhouette_image_path.empty()) {
     if (mesh_path.empty() || input_path.empty()) {
       ThrowInputError(
@@ -626,21 +728,10 @@ int RunEvaluate(int argc, char** argv) {
                       "a textured true surface (give --heldout_path and "
                       "--surface_path)");
     }
-    TriangleMesh model = ReadMeshPly(textured_mesh_path);
-    Transform(truth_from_model, &model.vertices);
-    if (texture_path.empty()) texture_path = PlyTextureFile(textured_mesh_path);
     cv::Mat model_texture;
-    if (model.HasTexcoords()) {
-      if (texture_path.empty()) {
-        ThrowInputError(textured_mesh_path,
-                        ": has texture coordinates but names no TextureFile "
-                        "(give --texture_path)");
-      }
-      model_texture = ReadImage(texture_path, ImageReadMode::kColor);
-    } else if (!model.vertices.HasColors()) {
-      ThrowInputError(textured_mesh_path,
-                      ": has neither texture coordinates nor vertex colours");
-    }
+    TriangleMesh model =
+        ReadTexturedModel(textured_mesh_path, texture_path, &model_texture);
+    Transform(truth_from_model, &model.vertices);
     const TriangleMesh surface = ReadMeshPly(surface_path);
     const std::string truth_texture_path = PlyTextureFile(surface_path);
     const cv::Mat truth_texture =
@@ -658,20 +749,8 @@ int RunEvaluate(int argc, char** argv) {
                                                       options);
     std::printf("\ntextured model from held-out viewpoints:\n%s",
                 TextureTable(e).c_str());
-    Json texture = {{"path", textured_mesh_path},
-                    {"mean_psnr_db", e.mean_psnr_db},
-                    {"mean_ssim", e.mean_ssim},
-                    {"mean_normalized_psnr_db", e.mean_normalized_psnr_db},
-                    {"mean_normalized_ssim", e.mean_normalized_ssim}};
-    texture["views"] = Json::array();
-    for (const ViewComparison& v : e.views) {
-      texture["views"].push_back({{"name", v.name},
-                                  {"pixels", v.raw.num_pixels},
-                                  {"psnr_db", v.raw.psnr_db},
-                                  {"ssim", v.raw.ssim},
-                                  {"normalized_psnr_db", v.normalized.psnr_db},
-                                  {"normalized_ssim", v.normalized.ssim}});
-    }
+    Json texture = {{"path", textured_mesh_path}};
+    texture.update(TextureToJson(e));
     report["texture"] = texture;
   }
 

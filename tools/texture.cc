@@ -39,6 +39,29 @@ nlohmann::ordered_json ReportToJson(const TextureReport& r,
   json["num_seam_edges"] = r.num_seam_edges;
   json["seam_difference"] = r.seam_difference;
   json["faces_per_image"] = r.faces_per_image;
+  json["seam_leveling"] = options.seam_leveling;
+  if (options.seam_leveling) {
+    json["seam_leveling_report"] = {
+        {"num_seam_edges", r.seam_leveling.num_seam_edges},
+        {"num_unknowns", r.seam_leveling.num_unknowns},
+        {"difference_before", r.seam_leveling.difference_before},
+        {"difference_after", r.seam_leveling.difference_after}};
+  }
+  if (options.preprocess == TexturePreprocess::kBalance) {
+    nlohmann::ordered_json balance = {
+        {"num_faces", r.balance.num_faces},
+        {"num_pairs", r.balance.num_pairs},
+        {"sigma_before", r.balance.sigma_before},
+        {"sigma_after", r.balance.sigma_after},
+        {"images", nlohmann::ordered_json::object()}};
+    for (const auto& [name, c] : r.corrections) {
+      balance["images"][name] = {
+          {"gain_bgr", {c.gain[0], c.gain[1], c.gain[2]}},
+          {"offset_bgr", {c.offset[0], c.offset[1], c.offset[2]}}};
+    }
+    json["balance"] = balance;
+  }
+  json["exclude_images"] = options.exclude_images;
   json["seconds"] = {{"load", r.seconds_load},
                      {"preprocess", r.seconds_preprocess},
                      {"visibility", r.seconds_visibility},
@@ -51,21 +74,23 @@ nlohmann::ordered_json ReportToJson(const TextureReport& r,
 
 int RunTexture(int argc, char** argv) {
   OrientedInput in;
-  std::string mesh_path, output_path, log_path,
-      preprocess = "highpass_equalize", blend = "view_dependent";
+  std::string mesh_path, output_path, log_path, preprocess = "balance",
+                                                blend = "view_dependent";
   std::vector<std::string> formats = {"obj", "ply", "wrl", "glb"};
   TextureOptions options;
   ModelExportOptions export_options;
   CommandLine command(
       "texture",
       "View-dependent texture mapping (the Bayon paper's sec. 3.5): the "
-      "photographs pre-processed (high pass and histogram equalisation per "
-      "channel, or Wallis), every triangle's visibility in every photograph, "
-      "its geometrically optimal image (largest projected area), and the "
-      "texture averaged over all photographs that see it with weights "
-      "area_j / area_max, each transformed affinely into the optimal image's "
-      "geometry. Writes a texture atlas (PNG) with the model as OBJ + MTL, "
-      "PLY, VRML 2.0 and glTF binary, and texture.json.");
+      "photographs' exposures and white balances balanced (a gain and offset "
+      "per photograph and channel over their overlaps; or the paper's high "
+      "pass and histogram equalisation, or Wallis), every triangle's "
+      "visibility in every photograph, its geometrically optimal image "
+      "(largest projected area), the texture averaged over all photographs "
+      "that see it with weights area_j / area_max, each transformed affinely "
+      "into the optimal image's geometry, and the chart borders levelled. "
+      "Writes a texture atlas (PNG) with the model as OBJ + MTL, PLY, VRML "
+      "2.0 and glTF binary, and texture.json.");
   CLI::App& app = command.app();
   in.AddOptions(app,
                 "Workspace: defaults images/, sparse/adjusted, database.db, "
@@ -77,7 +102,15 @@ int RunTexture(int argc, char** argv) {
       ->delimiter(',');
   app.add_option("--preprocess",
                  preprocess,
-                 "Radiometric pre-processing: highpass_equalize, wallis, none");
+                 "Radiometric pre-processing: balance (true colours), "
+                 "highpass_equalize (the paper's), wallis, none");
+  app.add_option("--seam_leveling",
+                 options.seam_leveling,
+                 "1: level the colours across chart borders");
+  app.add_option("--exclude_images",
+                 options.exclude_images,
+                 "Photographs not to texture from (names, comma separated)")
+      ->delimiter(',');
   app.add_option("--filter_radius_px",
                  options.filter_radius_px,
                  "High-pass radius / Wallis window (Gaussian sigma), px");

@@ -44,7 +44,102 @@ void WriteRender(const std::string& path, const cv::Mat& bgr) {
   WriteImage(path, bytes);
 }
 
+// The views' means.
+void Summarize(TextureEvaluation* evaluation) {
+  for (const ViewComparison& v : evaluation->views) {
+    evaluation->mean_psnr_db += v.raw.psnr_db;
+    evaluation->mean_ssim += v.raw.ssim;
+    evaluation->mean_normalized_psnr_db += v.normalized.psnr_db;
+    evaluation->mean_normalized_ssim += v.normalized.ssim;
+  }
+  const double n = static_cast<double>(evaluation->views.size());
+  evaluation->mean_psnr_db /= n;
+  evaluation->mean_ssim /= n;
+  evaluation->mean_normalized_psnr_db /= n;
+  evaluation->mean_normalized_ssim /= n;
+}
+
+ViewComparison Compare(const std::string& name,
+                       const cv::Mat& image,
+                       const cv::Mat& reference,
+                       const cv::Mat& mask) {
+  ViewComparison comparison;
+  comparison.name = name;
+  comparison.raw = CompareImages(image, reference, mask);
+  comparison.normalized =
+      CompareImages(FitChannels(image, reference, mask), reference, mask);
+  return comparison;
+}
+
+RenderOptions UnlitRenderOptions(const TextureEvaluationOptions& options) {
+  RenderOptions render;
+  render.supersampling = options.supersampling;
+  render.geometry_buffers = false;
+  render.num_threads = options.num_threads;
+  return render;
+}
+
+RenderView ViewOf(const Scene& scene, const Image& image) {
+  RenderView view;
+  view.camera = scene.cameras.at(image.camera_id);
+  view.cam_from_world = image.cam_from_world;
+  view.frame = image.frame;
+  return view;
+}
+
 }  // namespace
+
+TextureEvaluation EvaluateAgainstPhotographs(
+    const TriangleMesh& model,
+    const cv::Mat& model_texture,
+    const Scene& scene,
+    const std::vector<std::pair<std::string, cv::Mat>>& photographs,
+    const TextureEvaluationOptions& options) {
+  if (photographs.empty()) ThrowInputError("no photographs to compare with");
+  const MeshRenderer renderer(model, model_texture);
+  const RenderOptions render = UnlitRenderOptions(options);
+  if (!options.render_dir.empty()) {
+    std::filesystem::create_directories(options.render_dir);
+  }
+  TextureEvaluation evaluation;
+  for (const auto& [name, bgr] : photographs) {
+    const Image* image = scene.FindImageByName(name);
+    if (image == nullptr) {
+      ThrowInputError("the model has no image '", name, "'");
+    }
+    const RenderView view = ViewOf(scene, *image);
+    if (bgr.cols != static_cast<int>(view.camera.width) ||
+        bgr.rows != static_cast<int>(view.camera.height)) {
+      ThrowInputError(name,
+                      ": is ",
+                      bgr.cols,
+                      " x ",
+                      bgr.rows,
+                      " pixels but its camera is ",
+                      view.camera.width,
+                      " x ",
+                      view.camera.height);
+    }
+    const RenderResult rendered = renderer.Render(view, Lighting(), render);
+    const cv::Mat mask = rendered.coverage >= 0.999f;
+    if (cv::countNonZero(mask) == 0) {
+      ThrowInputError(name, ": the model does not appear in it");
+    }
+    cv::Mat photograph;
+    bgr.convertTo(photograph, CV_32FC3, 1.0 / 255.0);
+    evaluation.views.push_back(Compare(name, rendered.color, photograph, mask));
+    if (!options.render_dir.empty()) {
+      const std::string stem = std::filesystem::path(name).stem().string();
+      WriteRender(options.render_dir + "/model_" + stem + ".png",
+                  rendered.color);
+      cv::Mat masked = cv::Mat::zeros(photograph.size(), photograph.type());
+      photograph.copyTo(masked, mask);
+      WriteRender(options.render_dir + "/photograph_" + stem + ".png", masked);
+    }
+  }
+  Summarize(&evaluation);
+  return evaluation;
+}
 
 TextureEvaluation EvaluateTexturedModel(
     const TriangleMesh& model,
@@ -58,10 +153,7 @@ TextureEvaluation EvaluateTexturedModel(
   }
   const MeshRenderer model_renderer(model, model_texture);
   const MeshRenderer truth_renderer(truth, truth_texture);
-  RenderOptions render;
-  render.supersampling = options.supersampling;
-  render.geometry_buffers = false;
-  render.num_threads = options.num_threads;
+  const RenderOptions render = UnlitRenderOptions(options);
   const Lighting unlit;
   if (!options.render_dir.empty()) {
     std::filesystem::create_directories(options.render_dir);
@@ -69,10 +161,7 @@ TextureEvaluation EvaluateTexturedModel(
 
   TextureEvaluation evaluation;
   for (const auto& [image_id, image] : viewpoints.images) {
-    RenderView view;
-    view.camera = viewpoints.cameras.at(image.camera_id);
-    view.cam_from_world = image.cam_from_world;
-    view.frame = image.frame;
+    const RenderView view = ViewOf(viewpoints, image);
     const RenderResult truth_render =
         truth_renderer.Render(view, unlit, render);
     const RenderResult model_render =
@@ -81,15 +170,8 @@ TextureEvaluation EvaluateTexturedModel(
     // in the background and would judge the anti-aliasing.
     const cv::Mat mask = truth_render.coverage >= 0.999f;
     if (cv::countNonZero(mask) == 0) continue;
-    ViewComparison comparison;
-    comparison.name = image.name;
-    comparison.raw =
-        CompareImages(model_render.color, truth_render.color, mask);
-    comparison.normalized =
-        CompareImages(FitChannels(model_render.color, truth_render.color, mask),
-                      truth_render.color,
-                      mask);
-    evaluation.views.push_back(comparison);
+    evaluation.views.push_back(
+        Compare(image.name, model_render.color, truth_render.color, mask));
     if (!options.render_dir.empty()) {
       const std::string stem =
           std::filesystem::path(image.name).stem().string();
@@ -104,17 +186,7 @@ TextureEvaluation EvaluateTexturedModel(
                     viewpoints.images.size(),
                     " viewpoints sees the true surface");
   }
-  for (const ViewComparison& v : evaluation.views) {
-    evaluation.mean_psnr_db += v.raw.psnr_db;
-    evaluation.mean_ssim += v.raw.ssim;
-    evaluation.mean_normalized_psnr_db += v.normalized.psnr_db;
-    evaluation.mean_normalized_ssim += v.normalized.ssim;
-  }
-  const double n = static_cast<double>(evaluation.views.size());
-  evaluation.mean_psnr_db /= n;
-  evaluation.mean_ssim /= n;
-  evaluation.mean_normalized_psnr_db /= n;
-  evaluation.mean_normalized_ssim /= n;
+  Summarize(&evaluation);
   return evaluation;
 }
 

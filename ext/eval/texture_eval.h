@@ -58,6 +58,20 @@ TextureEvaluation EvaluateTexturedModel(
     const Scene& viewpoints,
     const TextureEvaluationOptions& options);
 
+// A textured model against photographs it was not made from (leave one
+// out): the model rendered unlit through each photograph's camera, and
+// compared with the photograph over the pixels the model fills entirely,
+// as it is (`raw`) and after a per-channel gain and offset (`normalized`).
+// `photographs`: 8-bit BGR, by image name in `scene`. Throws InputError
+// for a name the scene lacks, a size that differs from its camera's, or a
+// photograph the model does not appear in.
+TextureEvaluation EvaluateAgainstPhotographs(
+    const TriangleMesh& model,
+    const cv::Mat& model_texture,
+    const Scene& scene,
+    const std::vector<std::pair<std::string, cv::Mat>>& photographs,
+    const TextureEvaluationOptions& options);
+
 std::string TextureTable(const TextureEvaluation& evaluation);
 
 }  // namespace bayon
