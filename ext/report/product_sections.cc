@@ -343,6 +343,31 @@ Section TextureSection(const Workspace& ws, Page* page) {
   facts.Add("Seam measure (mean colour difference across seams)",
             FormatFixed(Number(t, "seam_difference"), 2) + " grey levels on " +
                 CountOf(t, "num_seam_edges") + " edges");
+  const Json& balance = Child(t, "balance");
+  if (!balance.is_null()) {
+    double lowest = 1e300, highest = -1e300;
+    for (const auto& [name, image] : Child(balance, "images").items()) {
+      for (const Json& gain : Child(image, "gain_bgr")) {
+        lowest = std::min(lowest, Number(gain));
+        highest = std::max(highest, Number(gain));
+      }
+    }
+    facts.Add("Exposure balance (gain and offset per photograph and channel)",
+              "differences over " + CountOf(balance, "num_faces") +
+                  " shared faces " +
+                  FormatFixed(Number(balance, "sigma_before"), 2) + " &rarr; " +
+                  FormatFixed(Number(balance, "sigma_after"), 2) +
+                  " grey levels (robust sigma); gains " +
+                  FormatFixed(lowest, 3) + " to " + FormatFixed(highest, 3));
+  }
+  const Json& leveling = Child(t, "seam_leveling_report");
+  if (!leveling.is_null()) {
+    facts.Add("Seam levelling (differences across chart borders)",
+              FormatFixed(Number(leveling, "difference_before"), 2) +
+                  " &rarr; " +
+                  FormatFixed(Number(leveling, "difference_after"), 2) +
+                  " grey levels");
+  }
   double total = 0;
   for (const auto& [step, value] : Child(t, "seconds").items()) {
     if (value.is_number()) total += value.get<double>();

@@ -12,7 +12,13 @@
 #   fountain  ../shared/data/fountain-P11 and temple-ring with bayon's
 #   temple    orientation, their dense clouds meshed by Poisson, where
 #             `scripts/bench.sh dense` has made the clouds: time and peak
-#             memory; renders (all modes and anaglyphs) from the stations
+#             memory; renders (all modes and anaglyphs) from the stations;
+#             and on fountain-P11, leave one out: textured without one of
+#             three photographs and rendered from its station, PSNR and
+#             SSIM against it over the facade (no gain or offset fitted),
+#             for the default (balance, view-dependent blend, seam
+#             levelling), the paper's (high pass and equalisation, no
+#             levelling) and the optimal image alone as photographed
 # Threads: $BAYON_THREADS (default 2, the CI machine's cores).
 set -euo pipefail
 dir="$(cd "$(dirname "$0")/../.." && pwd)/build/bench/texture"
@@ -47,7 +53,7 @@ printf '%-14s %-18s %-15s %7s %8s %9s %7s %8s %8s\n' mesh preprocess blend \
 for mesh in true reconstructed; do
   mesh_path="$tower/ws/gt/surface.ply"
   [ "$mesh" = reconstructed ] && mesh_path="$tower/mesh/mesh.ply"
-  for preprocess in highpass_equalize wallis none; do
+  for preprocess in balance highpass_equalize wallis none; do
     for blend in none view_dependent; do
       out="$tower/runs/${mesh}_${preprocess}_$blend"
       mkdir -p "$(dirname "$out")"
@@ -96,4 +102,37 @@ for set in fountain-P11:fountain:/images temple-ring:temple:; do
     "$(wall_s "$out/texture")" "$(peak_mb "$out/texture")"
   printf '%-14s %8s %8s %8s %12s %8.1f %8s\n' "$name" render - - - \
     "$(wall_s "$out/render")" "$(peak_mb "$out/render")"
+done
+
+# Leave one out on fountain-P11 (the mesh and model of the table above).
+mesh="$dir/fountain/mesh.ply"
+model="$(dirname "$dir")/chain/fountain/adjusted"
+[ -f "$mesh" ] || exit 0
+images="$BAYON_DATA_DIR/fountain-P11/images"
+echo
+printf '%-10s %-12s %8s %8s %8s %9s %8s\n' photograph method "PSNR dB" SSIM \
+  seam "PSNR* dB" SSIM*
+for k in 0002.jpg 0005.jpg 0008.jpg; do
+  for method in "default:" \
+    "paper:--preprocess highpass_equalize --seam_leveling 0" \
+    "optimal:--preprocess none --blend none --seam_leveling 0"; do
+    name="${method%%:*}"
+    out="$dir/fountain/leave_one_out/${k%.jpg}_$name"
+    mkdir -p "$out"
+    # shellcheck disable=SC2086  # the method's options, split on purpose
+    "$BAYON" texture --image_path "$images" --input_path "$model" \
+      --mesh_path "$mesh" --output_path "$out" --formats ply \
+      --exclude_images "$k" --overwrite 1 --num_threads "$threads" \
+      ${method#*:} >"$out.log" 2>&1 || continue
+    "$BAYON" evaluate --image_path "$images" --image_names "$k" \
+      --textured_mesh_path "$out/model.ply" --input_path "$model" \
+      --output_path "$out/evaluation.json" --render_path "$out/renders" \
+      --num_threads "$threads" >"$out.evaluate.log" 2>&1 || continue
+    printf '%-10s %-12s %8.2f %8.4f %8.2f %9.2f %8.4f\n' "$k" "$name" \
+      "$(json_number "$out/evaluation.json" mean_psnr_db)" \
+      "$(json_number "$out/evaluation.json" mean_ssim)" \
+      "$(json_number "$out/texture.json" seam_difference)" \
+      "$(json_number "$out/evaluation.json" mean_normalized_psnr_db)" \
+      "$(json_number "$out/evaluation.json" mean_normalized_ssim)"
+  done
 done
