@@ -120,6 +120,10 @@ int RunDense(int argc, char** argv) {
   app.add_option("--patch_match_best_views",
                  options.patch_match.best_views,
                  "multiview: a plane's cost over its best n views");
+  app.add_option("--edge_margin_px",
+                 options.fusion.edge_margin_px,
+                 "multiview: depth-map pixels this near an area without "
+                 "depth are not fused (against edge fattening; 0: off)");
   app.add_option("--min_consistent_views",
                  options.fusion.min_consistent_views,
                  "multiview: other depth maps that must agree with a pixel");

@@ -149,6 +149,8 @@ const char* DenseRejectName(DenseReject reason) {
       return "inconsistent";
     case DenseReject::kMerged:
       return "merged";
+    case DenseReject::kDepthEdge:
+      return "depth_edge";
     case DenseReject::kNumReasons:
       break;
   }
@@ -1405,6 +1407,8 @@ std::optional<cv::Scalar> ReasonColor(DenseReject reason) {
       return cv::Scalar(255, 255, 255);
     case DenseReject::kMerged:
       return cv::Scalar(150, 230, 150);
+    case DenseReject::kDepthEdge:
+      return cv::Scalar(120, 120, 120);
     case DenseReject::kNoTexture:
     case DenseReject::kNumReasons:
       return std::nullopt;

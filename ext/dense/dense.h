@@ -196,6 +196,7 @@ enum class DenseReject {
                   // though matched in that master; multiview: too few
                   // other depth maps agree
   kMerged,        // multiview: part of a point of another master
+  kDepthEdge,     // multiview: near an edge of the master's depth map
   kNumReasons
 };
 const char* DenseRejectName(DenseReject reason);

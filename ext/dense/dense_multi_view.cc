@@ -428,6 +428,9 @@ PointCloud DenseReconstructMultiView(
         case FusionVerdict::kMerged:
           reason = DenseReject::kMerged;
           break;
+        case FusionVerdict::kDepthEdge:
+          reason = DenseReject::kDepthEdge;
+          break;
       }
       entry.reasons.at<uint8_t>(static_cast<int>(p)) =
           static_cast<uint8_t>(reason);

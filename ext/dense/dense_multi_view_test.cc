@@ -98,6 +98,52 @@ TEST(Fusion, OnePointPerSurfaceElementAndBlundersLeftOut) {
   EXPECT_THROW(bad.Check(), InputError);
 }
 
+// Edge fattening: the first map has no depth right of x = 150 (an
+// untextured background) and in a 3 x 3 hole. Its pixels within
+// edge_margin_px of the background are not fused; the hole, narrower than
+// two margins, and the image frame are no edges.
+TEST(Fusion, PixelsAtAnEdgeOfTheDepthMapAreNotFused) {
+  const PlaneScene scene(0.0);
+  TrueDepthMaps truth(scene);
+  DepthMap& first = truth.maps[0];
+  for (int y = 0; y < first.height; ++y) {
+    for (int x = 150; x < first.width; ++x) first.depth[first.index(x, y)] = 0;
+  }
+  for (int y = 59; y < 62; ++y) {
+    for (int x = 59; x < 62; ++x) first.depth[first.index(x, y)] = 0;
+  }
+  std::vector<const PinholeView*> views;
+  std::vector<const DepthMap*> maps;
+  for (size_t j = 0; j < truth.maps.size(); ++j) {
+    views.push_back(&truth.views[j]);
+    maps.push_back(&truth.maps[j]);
+  }
+  FusionOptions options;
+  ASSERT_EQ(options.edge_margin_px, 5);
+  std::vector<std::vector<FusionVerdict>> verdicts;
+  FuseDepthMaps(views, maps, options, &verdicts);
+  const int y = first.height / 2;
+  for (int x = 140; x < 150; ++x) {
+    EXPECT_EQ(verdicts[0][first.index(x, y)] == FusionVerdict::kDepthEdge,
+              x >= 145)
+        << x;
+  }
+  for (int x = 50; x < 70; ++x) {
+    EXPECT_NE(verdicts[0][first.index(x, 60)], FusionVerdict::kDepthEdge) << x;
+  }
+  for (int x = 0; x < 5; ++x) {
+    EXPECT_NE(verdicts[0][first.index(x, y)], FusionVerdict::kDepthEdge) << x;
+    EXPECT_NE(verdicts[0][first.index(y, x)], FusionVerdict::kDepthEdge) << x;
+  }
+  options.edge_margin_px = 0;
+  FuseDepthMaps(views, maps, options, &verdicts);
+  for (const FusionVerdict verdict : verdicts[0]) {
+    ASSERT_NE(verdict, FusionVerdict::kDepthEdge);
+  }
+  options.edge_margin_px = -1;
+  EXPECT_THROW(options.Check(), InputError);
+}
+
 // The plane scene on disk, as `bayon dense` reads it.
 class PlaneOnDisk {
  public:

@@ -3,6 +3,8 @@
 
 #include "ext/core/errors.h"
 
+#include <opencv2/imgproc.hpp>
+
 #include <cmath>
 
 namespace bayon {
@@ -22,6 +24,7 @@ void FusionOptions::Check() const {
               max_normal_error_deg);
   CheckOption(
       max_cost > 0 && max_cost <= 2, "--max_cost", "in (0, 2]", max_cost);
+  CheckOption(edge_margin_px >= 0, "--edge_margin_px", ">= 0", edge_margin_px);
 }
 
 namespace {
@@ -71,8 +74,29 @@ std::vector<FusedPoint> FuseDepthMaps(
   const float max_error = static_cast<float>(options.max_depth_error_px);
   const float min_cos =
       static_cast<float>(std::cos(options.max_normal_error_deg * M_PI / 180));
+  // Pixels away from the edges of their depth maps (edge_margin_px).
+  std::vector<cv::Mat> inner(n);
+  for (int i = 0; i < n; ++i) {
+    cv::Mat good(maps[i]->height, maps[i]->width, CV_8U);
+    for (size_t q = 0; q < maps[i]->depth.size(); ++q) {
+      good.data[q] = maps[i]->depth[q] > 0;
+    }
+    if (options.edge_margin_px > 0) {
+      const int r = options.edge_margin_px;
+      const cv::Mat square = cv::getStructuringElement(
+          cv::MORPH_RECT, cv::Size(2 * r + 1, 2 * r + 1));
+      // Beyond the frame counts as depth (the default border of OpenCV's
+      // morphology): the band at the frame where the window does not fit
+      // is closed, and the frame is no edge of the object.
+      cv::Mat closed;
+      cv::morphologyEx(good, closed, cv::MORPH_CLOSE, square);
+      cv::erode(closed, closed, square);
+      good &= closed;
+    }
+    inner[i] = good;
+  }
   const auto usable = [&](int i, size_t q) {
-    return maps[i]->depth[q] > 0 && maps[i]->cost[q] <= max_cost;
+    return inner[i].data[q] != 0 && maps[i]->cost[q] <= max_cost;
   };
   const auto used = [&](int i, size_t q) {
     return (*verdicts)[i][q] == FusionVerdict::kMerged ||
@@ -91,6 +115,10 @@ std::vector<FusedPoint> FuseDepthMaps(
         if (map.depth[p] <= 0 || verdict[p] != FusionVerdict::kNone) continue;
         if (map.cost[p] > max_cost) {
           verdict[p] = FusionVerdict::kPoorMatch;
+          continue;
+        }
+        if (!inner[i].data[p]) {
+          verdict[p] = FusionVerdict::kDepthEdge;
           continue;
         }
         const Eigen::Vector3f X = camera.World(x, y, map.depth[p]);

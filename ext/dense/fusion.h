@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // Fusion of the masters' depth maps (patch_match.h) into one cloud. A pixel
-// becomes a point when its plane was matched well (cost at most max_cost)
+// becomes a point when it is not at an edge of its depth map (see
+// edge_margin_px), its plane was matched well (cost at most max_cost)
 // and the depth maps of at least min_consistent_views other masters agree
 // with it: the point projects into them onto a pixel whose depth is the
 // point's within max_depth_error_px footprints of that depth map's pixel
@@ -29,6 +30,16 @@ struct FusionOptions {
   double max_depth_error_px = 2.0;
   double max_normal_error_deg = 30;
   double max_cost = 0.6;
+  // Pixels within this many pixels (a square) of an area without depth are
+  // neither fused nor count as agreeing. PatchMatch's window reaches
+  // window_radius pixels past its centre: where it straddles an object's
+  // edge against an untextured background (or sky, or a hole the matching
+  // left), the texture of the object decides, and background pixels next to
+  // the edge take the object's depth ("edge fattening"), which meshes turn
+  // into a rim around the object. Holes narrower than two margins (a few
+  // untextured or poorly matched pixels inside a surface) are closed first
+  // and do not count as edges. 0: off.
+  int edge_margin_px = 5;
   void Check() const;  // throws InputError naming field, value, rule
 };
 
@@ -39,6 +50,7 @@ enum class FusionVerdict : uint8_t {
   kInconsistent,  // too few other depth maps agree
   kPoint,         // became a point (this master's)
   kMerged,        // part of a point of another master
+  kDepthEdge,     // within edge_margin_px of a pixel without depth
 };
 
 struct FusedPoint {
