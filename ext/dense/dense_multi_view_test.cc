@@ -51,6 +51,17 @@ struct TrueDepthMaps {
       }
     }
   }
+  // FuseDepthMaps's inputs.
+  std::vector<const PinholeView*> ViewPointers() const {
+    std::vector<const PinholeView*> pointers;
+    for (const PinholeView& view : views) pointers.push_back(&view);
+    return pointers;
+  }
+  std::vector<const DepthMap*> MapPointers() const {
+    std::vector<const DepthMap*> pointers;
+    for (const DepthMap& map : maps) pointers.push_back(&map);
+    return pointers;
+  }
 };
 
 TEST(Fusion, OnePointPerSurfaceElementAndBlundersLeftOut) {
@@ -61,12 +72,8 @@ TEST(Fusion, OnePointPerSurfaceElementAndBlundersLeftOut) {
   for (int y = 100; y < 120; ++y) {
     for (int x = 100; x < 120; ++x) first.depth[first.index(x, y)] *= 1.05f;
   }
-  std::vector<const PinholeView*> views;
-  std::vector<const DepthMap*> maps;
-  for (size_t j = 0; j < truth.maps.size(); ++j) {
-    views.push_back(&truth.views[j]);
-    maps.push_back(&truth.maps[j]);
-  }
+  const std::vector<const PinholeView*> views = truth.ViewPointers();
+  const std::vector<const DepthMap*> maps = truth.MapPointers();
   FusionOptions options;
   std::vector<std::vector<FusionVerdict>> verdicts;
   const std::vector<FusedPoint> points =
@@ -112,12 +119,8 @@ TEST(Fusion, PixelsAtAnEdgeOfTheDepthMapAreNotFused) {
   for (int y = 59; y < 62; ++y) {
     for (int x = 59; x < 62; ++x) first.depth[first.index(x, y)] = 0;
   }
-  std::vector<const PinholeView*> views;
-  std::vector<const DepthMap*> maps;
-  for (size_t j = 0; j < truth.maps.size(); ++j) {
-    views.push_back(&truth.views[j]);
-    maps.push_back(&truth.maps[j]);
-  }
+  const std::vector<const PinholeView*> views = truth.ViewPointers();
+  const std::vector<const DepthMap*> maps = truth.MapPointers();
   FusionOptions options;
   ASSERT_EQ(options.edge_margin_px, 5);
   std::vector<std::vector<FusionVerdict>> verdicts;
