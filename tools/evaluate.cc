@@ -326,9 +326,6 @@ int EvaluateAgainstPhotographs(const std::string& textured_mesh_path,
   const Scene scene = ReadOrientedModel(input_path, "");
   std::vector<std::pair<std::string, cv::Mat>> photographs;
   for (const std::string& name : image_names) {
-    if (scene.FindImageByName(name) == nullptr) {
-      ThrowInputError("--image_names: the model has no image '", name, "'");
-    }
     cv::Mat bgr = ReadImage(image_path + "/" + name, ImageReadMode::kColor);
     if (bgr.depth() == CV_16U) bgr.convertTo(bgr, CV_8U, 1.0 / 257.0);
     photographs.emplace_back(name, bgr);
@@ -464,6 +461,10 @@ int RunEvaluate(int argc, char** argv) {
   app.add_option("--num_threads", num_threads, "Threads (-1: all cores)");
   if (!command.Parse(argc, argv)) return 0;
 
+  if (image_path.empty() && !image_names.empty()) {
+    ThrowInputError(
+        "--image_names needs --image_path, the folder of those photographs");
+  }
   if (!image_path.empty()) {
     TextureEvaluationOptions options;
     options.num_threads = num_threads;

@@ -45,12 +45,15 @@ nlohmann::ordered_json ReportToJson(const TextureReport& r,
         {"num_seam_edges", r.seam_leveling.num_seam_edges},
         {"num_unknowns", r.seam_leveling.num_unknowns},
         {"difference_before", r.seam_leveling.difference_before},
-        {"difference_after", r.seam_leveling.difference_after}};
+        {"difference_after", r.seam_leveling.difference_after},
+        {"solver_iterations", r.seam_leveling.solver_iterations},
+        {"solver_error", r.seam_leveling.solver_error}};
   }
   if (options.preprocess == TexturePreprocess::kBalance) {
     nlohmann::ordered_json balance = {
         {"num_faces", r.balance.num_faces},
         {"num_pairs", r.balance.num_pairs},
+        {"num_groups", r.balance.num_groups},
         {"sigma_before", r.balance.sigma_before},
         {"sigma_after", r.balance.sigma_after},
         {"images", nlohmann::ordered_json::object()}};

@@ -352,21 +352,26 @@ Section TextureSection(const Workspace& ws, Page* page) {
         highest = std::max(highest, Number(gain));
       }
     }
+    std::string text =
+        "differences over " + CountOf(balance, "num_faces") + " shared faces " +
+        FormatFixed(Number(balance, "sigma_before"), 2) + " &rarr; " +
+        FormatFixed(Number(balance, "sigma_after"), 2) +
+        " grey levels (robust sigma)";
+    if (lowest <= highest) {
+      text += "; gains " + FormatFixed(lowest, 3) + " to " +
+              FormatFixed(highest, 3);
+    }
     facts.Add("Exposure balance (gain and offset per photograph and channel)",
-              "differences over " + CountOf(balance, "num_faces") +
-                  " shared faces " +
-                  FormatFixed(Number(balance, "sigma_before"), 2) + " &rarr; " +
-                  FormatFixed(Number(balance, "sigma_after"), 2) +
-                  " grey levels (robust sigma); gains " +
-                  FormatFixed(lowest, 3) + " to " + FormatFixed(highest, 3));
+              text);
   }
   const Json& leveling = Child(t, "seam_leveling_report");
-  if (!leveling.is_null()) {
-    facts.Add("Seam levelling (differences across chart borders)",
-              FormatFixed(Number(leveling, "difference_before"), 2) +
-                  " &rarr; " +
-                  FormatFixed(Number(leveling, "difference_after"), 2) +
-                  " grey levels");
+  if (!leveling.is_null() && Integer(leveling, "num_seam_edges") > 0) {
+    facts.Add(
+        "Seam levelling (the solver's differences at the chart "
+        "borders' samples)",
+        FormatFixed(Number(leveling, "difference_before"), 2) + " &rarr; " +
+            FormatFixed(Number(leveling, "difference_after"), 2) +
+            " grey levels");
   }
   double total = 0;
   for (const auto& [step, value] : Child(t, "seconds").items()) {

@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <numeric>
 
 namespace bayon {
 namespace {
@@ -19,20 +21,31 @@ namespace {
 struct ColorPair {
   int j, k;
   Eigen::Vector3f mj, mk;
-  float weight;  // 1 / (views of the face - 1): each face counts alike
+  // 1 / (views of the face - 1): each observation of a face counts alike,
+  // however many photographs see the face.
+  float weight;
 };
 
 std::vector<ColorPair> OverlapPairs(
     const std::vector<std::vector<FaceColor>>& faces,
+    int num_images,
     const ColorBalanceOptions& options,
     ColorBalanceReport* report) {
-  const size_t stride =
-      std::max<size_t>(1, faces.size() / std::max(1, options.max_faces));
+  const size_t max_faces = static_cast<size_t>(options.max_faces);
+  const size_t stride = (faces.size() + max_faces - 1) / max_faces;
   std::vector<ColorPair> pairs;
   std::vector<const FaceColor*> usable;
   for (size_t f = 0; f < faces.size(); f += stride) {
     usable.clear();
     for (const FaceColor& c : faces[f]) {
+      if (c.image < 0 || c.image >= num_images) {
+        ThrowInputError("exposure balance: face ",
+                        f,
+                        " names photograph ",
+                        c.image,
+                        " of ",
+                        num_images);
+      }
       if (c.color.maxCoeff() < options.saturated) usable.push_back(&c);
     }
     if (usable.size() < 2) continue;
@@ -130,6 +143,8 @@ void ColorBalanceOptions::Check() const {
   CheckOption(num_iterations >= 1, "num_iterations", ">= 1", num_iterations);
   CheckOption(huber_k > 0, "huber_k", "> 0", huber_k);
   CheckOption(max_faces >= 1, "max_faces", ">= 1", max_faces);
+  CheckOption(
+      saturated > 0 && saturated <= 255, "saturated", "in (0, 255]", saturated);
 }
 
 std::vector<GainOffset> BalanceExposures(
@@ -142,20 +157,55 @@ std::vector<GainOffset> BalanceExposures(
   if (report == nullptr) report = &local;
   *report = ColorBalanceReport();
   std::vector<GainOffset> corrections(num_images);
-  const std::vector<ColorPair> pairs = OverlapPairs(faces, options, report);
-  if (pairs.empty() || num_images < 2) return corrections;
-  Eigen::VectorXd start(2 * num_images);
-  start << Eigen::VectorXd::Ones(num_images), Eigen::VectorXd::Zero(num_images);
-  for (int c = 0; c < 3; ++c) {
-    const Eigen::VectorXd x = SolveChannel(pairs, c, num_images, options);
-    for (int j = 0; j < num_images; ++j) {
-      corrections[j].gain[c] = static_cast<float>(x[j]);
-      corrections[j].offset[c] = static_cast<float>(255.0 * x[num_images + j]);
+  const std::vector<ColorPair> pairs =
+      OverlapPairs(faces, num_images, options, report);
+  if (pairs.empty()) return corrections;
+  // The photographs linked by shared faces, group by group: the overlaps
+  // fix only the ratios within a group, so each group keeps its own mean
+  // gain 1 and mean offset 0, and a photograph in no pair stays as it is
+  // (one mean over all would let the groups trade their gains freely).
+  std::vector<int> parent(num_images);
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const ColorPair& p : pairs) parent[root(p.j)] = root(p.k);
+  std::map<int, std::vector<ColorPair>> groups;  // by root, group indices
+  std::vector<int> index_in_group(num_images, -1);
+  std::map<int, std::vector<int>> members;  // by root, global indices
+  for (int j = 0; j < num_images; ++j) members[root(j)].push_back(j);
+  for (auto& [r, images] : members) {
+    for (size_t i = 0; i < images.size(); ++i) {
+      index_in_group[images[i]] = static_cast<int>(i);
     }
-    report->sigma_before +=
-        255.0 * RobustSigma(Residuals(pairs, c, start, num_images)) / 3.0;
-    report->sigma_after +=
-        255.0 * RobustSigma(Residuals(pairs, c, x, num_images)) / 3.0;
+  }
+  for (ColorPair p : pairs) {
+    const int r = root(p.j);
+    p.j = index_in_group[p.j];
+    p.k = index_in_group[p.k];
+    groups[r].push_back(p);
+  }
+  std::vector<double> before[3], after[3];
+  for (const auto& [r, group] : groups) {
+    const std::vector<int>& images = members.at(r);
+    const int n = static_cast<int>(images.size());
+    Eigen::VectorXd start(2 * n);
+    start << Eigen::VectorXd::Ones(n), Eigen::VectorXd::Zero(n);
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::VectorXd x = SolveChannel(group, c, n, options);
+      for (int i = 0; i < n; ++i) {
+        corrections[images[i]].gain[c] = static_cast<float>(x[i]);
+        corrections[images[i]].offset[c] = static_cast<float>(255.0 * x[n + i]);
+      }
+      for (double v : Residuals(group, c, start, n)) before[c].push_back(v);
+      for (double v : Residuals(group, c, x, n)) after[c].push_back(v);
+    }
+  }
+  report->num_groups = static_cast<int>(groups.size());
+  for (int c = 0; c < 3; ++c) {
+    report->sigma_before += 255.0 * RobustSigma(before[c]) / 3.0;
+    report->sigma_after += 255.0 * RobustSigma(after[c]) / 3.0;
   }
   return corrections;
 }
@@ -188,6 +238,7 @@ std::vector<std::array<Eigen::Vector3f, 3>> LevelSeams(
     const SeamLevelingOptions& options,
     SeamLevelingReport* report) {
   options.Check();
+  CHECK_EQ(chart.size(), mesh.NumFaces());
   SeamLevelingReport local;
   if (report == nullptr) report = &local;
   *report = SeamLevelingReport();
@@ -240,10 +291,10 @@ std::vector<std::array<Eigen::Vector3f, 3>> LevelSeams(
     if (chart[e.f] < 0 || chart[e.g] < 0 || chart[e.f] == chart[e.g]) {
       continue;
     }
-    ++report->num_seam_edges;
     const int fa = corner_of(e.f, e.a), fb = corner_of(e.f, e.b);
     const int ga = corner_of(e.g, e.a), gb = corner_of(e.g, e.b);
     if (fa < 0 || fb < 0 || ga < 0 || gb < 0) continue;
+    const size_t num_samples = samples.size();
     for (int s = 0; s < options.samples_per_edge; ++s) {
       const double t = (s + 0.5) / options.samples_per_edge;
       Eigen::Vector3d bf = Eigen::Vector3d::Zero(), bg = bf;
@@ -258,26 +309,33 @@ std::vector<std::array<Eigen::Vector3f, 3>> LevelSeams(
                          {1.0 - t, t, -(1.0 - t), -t},
                          cg - cf});
     }
+    report->num_seam_edges += samples.size() > num_samples;
   }
+  // A border edge's samples weigh 1 together.
+  const double sample_weight = 1.0 / options.samples_per_edge;
   for (const Sample& s : samples) {
     for (int a = 0; a < 4; ++a) {
       for (int b = 0; b < 4; ++b) {
         triplets.emplace_back(
-            s.index[a], s.index[b], s.coefficient[a] * s.coefficient[b]);
+            s.index[a],
+            s.index[b],
+            sample_weight * s.coefficient[a] * s.coefficient[b]);
       }
-      rhs.row(s.index[a]) +=
-          s.coefficient[a] * s.difference.cast<double>().transpose();
+      rhs.row(s.index[a]) += sample_weight * s.coefficient[a] *
+                             s.difference.cast<double>().transpose();
     }
   }
-  // Within a chart: neighbouring vertices change alike.
+  // Within a chart: neighbouring vertices change alike. An inner edge is
+  // met from both its faces, so each meeting weighs half.
+  const double half = 0.5 * options.smoothness;
   for (int face = 0; face < num_faces; ++face) {
     if (chart[face] < 0) continue;
     for (int k = 0; k < 3; ++k) {
       const int u = unknown(face, k), v = unknown(face, (k + 1) % 3);
-      triplets.emplace_back(u, u, options.smoothness);
-      triplets.emplace_back(v, v, options.smoothness);
-      triplets.emplace_back(u, v, -options.smoothness);
-      triplets.emplace_back(v, u, -options.smoothness);
+      triplets.emplace_back(u, u, half);
+      triplets.emplace_back(v, v, half);
+      triplets.emplace_back(u, v, -half);
+      triplets.emplace_back(v, u, -half);
     }
   }
   for (int i = 0; i < n; ++i) {
@@ -298,7 +356,17 @@ std::vector<std::array<Eigen::Vector3f, 3>> LevelSeams(
   solver.setTolerance(1e-4);
   solver.compute(normal);
   Eigen::MatrixXd g(n, 3);
-  for (int c = 0; c < 3; ++c) g.col(c) = solver.solve(rhs.col(c));
+  for (int c = 0; c < 3; ++c) {
+    g.col(c) = solver.solve(rhs.col(c));
+    report->solver_iterations = std::max(report->solver_iterations,
+                                         static_cast<int>(solver.iterations()));
+    report->solver_error = std::max(report->solver_error, solver.error());
+  }
+  if (solver.info() != Eigen::Success) {
+    LOG(WARNING) << "seam levelling: conjugate gradients stopped after "
+                 << report->solver_iterations << " iterations at relative "
+                 << "residual " << report->solver_error;
+  }
 
   double before = 0, after = 0;
   for (const Sample& s : samples) {

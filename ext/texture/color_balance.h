@@ -12,10 +12,11 @@
 //    with rho Huber's loss (iteratively reweighted; the scale from the
 //    median absolute residual), so that occlusions the mesh misses,
 //    highlights and misregistered detail do not pull the solution. The
-//    correction is relative: the mean gain is held at 1 and the mean offset
-//    at 0, so the texture keeps the photographs' average exposure and white
-//    balance. A sample clipped in any channel does not count (the linear
-//    model does not hold there).
+//    correction is relative: in each group of photographs linked by shared
+//    faces the mean gain is held at 1 and the mean offset at 0, so the
+//    texture keeps the photographs' average exposure and white balance. A
+//    sample clipped in any channel does not count (the linear model does not
+//    hold there).
 // 2. Seam levelling (Waechter, Moehrle, Goesele, "Let there be color!",
 //    ECCV 2014, global seam levelling): what the balance leaves at the
 //    borders between charts (shading that depends on the view, vignetting)
@@ -63,8 +64,9 @@ struct ColorBalanceOptions {
 };
 
 struct ColorBalanceReport {
-  int num_faces = 0;  // faces seen by two or more photographs
-  int num_pairs = 0;  // face observations compared
+  int num_faces = 0;   // faces seen by two or more photographs
+  int num_pairs = 0;   // pairs of a face's observations compared
+  int num_groups = 0;  // groups of photographs linked by shared faces
   // Robust standard deviation of the pairwise differences, grey levels,
   // before and after (mean over channels).
   double sigma_before = 0;
@@ -72,7 +74,10 @@ struct ColorBalanceReport {
 };
 
 // `faces`: for each face, its mean colour in the photographs that see it.
-// A photograph that overlaps no other keeps gain 1 and offset 0.
+// Photographs linked by shared faces are balanced as a group, each group
+// with mean gain 1 and mean offset 0; a photograph that overlaps no other
+// keeps gain 1 and offset 0. Throws InputError for a photograph index
+// outside [0, num_images).
 std::vector<GainOffset> BalanceExposures(
     const std::vector<std::vector<FaceColor>>& faces,
     int num_images,
@@ -89,8 +94,9 @@ struct TwoFaceEdge {
 };
 
 struct SeamLevelingOptions {
-  // Weight of the differences between neighbouring vertices of a chart
-  // against the chart borders' differences (Waechter et al.: 0.1).
+  // Weight of the difference across each edge inside a chart against that
+  // of a chart border edge (its samples together weigh 1); Waechter et
+  // al. use 0.1.
   double smoothness = 0.1;
   // Weight pulling each adjustment to 0, so that the colours of a mesh
   // part without chart borders are kept.
@@ -106,8 +112,11 @@ using FaceColorAt = std::function<bool(
     int face, const Eigen::Vector3d& b, Eigen::Vector3f* color)>;
 
 struct SeamLevelingReport {
-  int num_seam_edges = 0;
-  int num_unknowns = 0;  // vertex-and-chart pairs
+  int num_seam_edges = 0;  // chart-border edges with samples on both sides
+  int num_unknowns = 0;    // vertex-and-chart pairs
+  // The conjugate gradients: iterations and relative residual reached.
+  int solver_iterations = 0;
+  double solver_error = 0;
   // Mean absolute difference across the chart borders' samples, grey
   // levels, before and after the levelling.
   double difference_before = 0;

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/texture/color_balance.h"
 
+#include "ext/core/errors.h"
+
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -18,8 +20,12 @@ struct Overlaps {
   std::vector<GainOffset> exposure;  // the photographs' true ones
 };
 
-Overlaps MakeOverlaps(int num_images, double outliers, uint32_t seed) {
+Overlaps MakeOverlaps(int num_images,
+                      double outliers,
+                      uint32_t seed,
+                      float noise = 0.0f) {
   std::mt19937 random(seed);
+  std::normal_distribution<float> gaussian(0.0f, noise > 0 ? noise : 1.0f);
   std::uniform_real_distribution<float> colour(20, 200), gain(0.7f, 1.2f),
       offset(-15, 15), unit(0, 1);
   Overlaps o;
@@ -41,6 +47,10 @@ Overlaps MakeOverlaps(int num_images, double outliers, uint32_t seed) {
       FaceColor c;
       c.image = j;
       c.color = o.exposure[j].gain.cwiseProduct(truth) + o.exposure[j].offset;
+      if (noise > 0) {
+        c.color += Eigen::Vector3f(
+            gaussian(random), gaussian(random), gaussian(random));
+      }
       if (unit(random) < outliers) {
         c.color = Eigen::Vector3f(colour(random), colour(random), 30);
       }
@@ -60,7 +70,7 @@ double CorrectedSpread(const Overlaps& o,
   for (float truth = 20; truth <= 200; truth += 30) {
     for (int c = 0; c < 3; ++c) {
       double lo = 1e9, hi = -1e9;
-      for (size_t j = 0; j < corrections.size(); ++j) {
+      for (size_t j = 0; j < o.exposure.size(); ++j) {
         const double seen =
             o.exposure[j].gain[c] * truth + o.exposure[j].offset[c];
         const double corrected =
@@ -113,18 +123,48 @@ TEST(BalanceExposures, OcclusionsDoNotPullTheSolution) {
             << " grey levels (least squares alone: " << plain << ")\n";
 }
 
+// Mean gain of photographs [first, last) in channel 0.
+double MeanGain(const std::vector<GainOffset>& corrections,
+                int first,
+                int last) {
+  double sum = 0;
+  for (int j = first; j < last; ++j) sum += corrections[j].gain.x();
+  return sum / (last - first);
+}
+
+// With noise in the colours, the overlaps' cost shrinks with the gains: a
+// photograph without overlaps, or a second group of photographs, must not
+// take up what one mean over all would let the others give away.
 TEST(BalanceExposures, APhotographWithoutOverlapIsLeftAlone) {
-  Overlaps o = MakeOverlaps(6, 0.0, 3);
+  const Overlaps o = MakeOverlaps(6, 0.0, 3, 2.0f);
+  ColorBalanceReport report;
   const std::vector<GainOffset> corrections =
-      BalanceExposures(o.faces, 7, ColorBalanceOptions());
+      BalanceExposures(o.faces, 7, ColorBalanceOptions(), &report);
   ASSERT_EQ(corrections.size(), 7u);
-  EXPECT_NEAR(corrections[6].gain.x(), 1.0, 0.05);
-  EXPECT_NEAR(corrections[6].offset.x(), 0.0, 1.0);
+  EXPECT_EQ(report.num_groups, 1);
+  EXPECT_EQ(corrections[6].gain, Eigen::Vector3f::Ones());
+  EXPECT_EQ(corrections[6].offset, Eigen::Vector3f::Zero());
+  EXPECT_NEAR(MeanGain(corrections, 0, 6), 1.0, 1e-4);
+  EXPECT_LT(CorrectedSpread(o, corrections), 3.0);
+
+  // Two groups that share no face: each keeps its own mean gain 1.
+  Overlaps second = MakeOverlaps(6, 0.0, 4, 2.0f);
+  std::vector<std::vector<FaceColor>> both = o.faces;
+  for (std::vector<FaceColor> face : second.faces) {
+    for (FaceColor& c : face) c.image += 6;
+    both.push_back(face);
+  }
+  const std::vector<GainOffset> two =
+      BalanceExposures(both, 12, ColorBalanceOptions(), &report);
+  EXPECT_EQ(report.num_groups, 2);
+  EXPECT_NEAR(MeanGain(two, 0, 6), 1.0, 1e-4);
+  EXPECT_NEAR(MeanGain(two, 6, 12), 1.0, 1e-4);
+  EXPECT_THROW(BalanceExposures(both, 6, ColorBalanceOptions()), InputError);
+
   // Clipped samples do not count: a face seen clipped in one of its two
   // photographs has one usable colour.
   std::vector<std::vector<FaceColor>> clipped = {
       {{0, Eigen::Vector3f(255, 100, 100)}, {1, Eigen::Vector3f(90, 90, 90)}}};
-  ColorBalanceReport report;
   BalanceExposures(clipped, 2, ColorBalanceOptions(), &report);
   EXPECT_EQ(report.num_faces, 0);
 }
