@@ -65,6 +65,30 @@ TEST(CompareColmap, TempleRingSideBySide) {
   }
   const Json& b = c["bayon"];
   const Json& m = c["colmap"];
+  // A fair comparison: the calibrated camera bayon's import was given
+  // (pipeline.json) is given to COLMAP too, and held fixed in its mapper.
+  const Json pipeline = ReadJson(ws + "/pipeline.json");
+  std::string given;
+  for (const Json& stage : pipeline["stages"]) {
+    if (stage["name"] != "import") continue;
+    const Json& words = stage["command"];
+    for (size_t i = 0; i + 1 < words.size(); ++i) {
+      if (words[i] == "--camera_params") given = words[i + 1];
+    }
+  }
+  ASSERT_FALSE(given.empty());
+  ASSERT_TRUE(c["camera_given_to_colmap"].is_object());
+  EXPECT_EQ(c["camera_given_to_colmap"]["params"], given);
+  EXPECT_EQ(c["camera_given_to_colmap"]["model"], "PINHOLE");
+  const std::string mapper_command =
+      ReadJson(ws + "/colmap/colmap.json")["stages"][2]["command"];
+  for (const char* fixed : {"--Mapper.ba_refine_focal_length 0",
+                            "--Mapper.ba_refine_principal_point 0",
+                            "--Mapper.ba_refine_extra_params 0"}) {
+    EXPECT_NE(mapper_command.find(fixed), std::string::npos) << mapper_command;
+  }
+  ASSERT_EQ(m["cameras"].size(), 1u);
+  EXPECT_EQ(m["cameras"][0]["model"], "PINHOLE");
   // bayon registers the whole ring; COLMAP 13 of 16 in the benchmark.
   EXPECT_EQ(b["registered"], 16);
   EXPECT_GE(m["registered"].get<int>(), 10);
@@ -140,7 +164,8 @@ TEST(CompareColmap, TempleRingSideBySide) {
                           "sigma0 [px]",
                           "time mapper [s]",
                           "against the truth",
-                          "agreement of the cameras"}) {
+                          "agreement of the cameras",
+                          "given to COLMAP too and held fixed"}) {
     EXPECT_NE(table.find(row), std::string::npos) << row;
   }
   EXPECT_NE(output.find(table.substr(0, table.find('\n'))), std::string::npos);
@@ -308,6 +333,17 @@ TEST(CompareColmap, RefusesBadInputBeforeRunningColmap) {
                               "BROWN_BEYER"});
   EXPECT_EQ(result.exit_code, 2) << result.output;
   EXPECT_NE(result.LastLine().find("--camera_model"), std::string::npos)
+      << result.output;
+  // A calibration with the wrong number of parameters for its model.
+  result = testing::RunBayon({"compare_colmap",
+                              "--workspace_path",
+                              ws,
+                              "--camera_model",
+                              "PINHOLE",
+                              "--camera_params",
+                              "500,320,240"});
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  EXPECT_NE(result.LastLine().find("--camera_params"), std::string::npos)
       << result.output;
 
   // Nothing was run or written.

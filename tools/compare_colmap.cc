@@ -60,6 +60,11 @@ struct CompareColmapOptions {
   int num_neighbors = 10;
   // COLMAP's camera model for the one camera all images share.
   std::string camera_model = "SIMPLE_RADIAL";
+  // The camera's parameters (COLMAP's order, comma separated) where bayon
+  // was given a calibrated camera: COLMAP gets the same, held fixed in its
+  // bundle adjustment, so that both sides know the same. Empty: COLMAP
+  // calibrates the camera itself, as bayon did.
+  std::string camera_params;
   // SIFT works on images downsampled to this long side (pixels).
   int max_image_size = 3200;
   int num_threads = -1;  // -1 = all cores
@@ -87,7 +92,26 @@ struct CompareColmapOptions {
                       camera_model,
                       ")");
     }
+    if (!camera_params.empty()) {
+      const int given = static_cast<int>(
+          std::count(camera_params.begin(), camera_params.end(), ',') + 1);
+      const int wanted = CameraModelInfoFor(*model).num_params;
+      if (given != wanted) {
+        ThrowInputError("--camera_params: ",
+                        camera_model,
+                        " has ",
+                        wanted,
+                        " parameters (",
+                        CameraModelInfoFor(*model).params_info,
+                        "), got ",
+                        given,
+                        " ('",
+                        camera_params,
+                        "')");
+      }
+    }
   }
+  bool calibrated() const { return !camera_params.empty(); }
   std::string MatcherCommand() const { return matching + "_matcher"; }
 };
 
@@ -125,6 +149,9 @@ struct PipelineRecord {
   Json stage_seconds = Json::object();
   Json total_seconds = nullptr;           // of the sparse stages
   Json pipeline_total_seconds = nullptr;  // the whole recorded run
+  // The camera bayon's import was given (its --camera_model and
+  // --camera_params), empty where it was not.
+  std::string camera_model, camera_params;
 };
 
 std::optional<double> StampSeconds(const fs::path& workspace,
@@ -154,6 +181,16 @@ PipelineRecord ReadPipelineRecord(const fs::path& workspace) {
         record.image_path = json["image_path"].get<std::string>();
       }
       for (const Json& stage : json.value("stages", Json::array())) {
+        const Json words = stage.value("command", Json::array());
+        if (stage.value("name", "") == "import") {
+          for (size_t i = 0; i + 1 < words.size(); ++i) {
+            if (words[i] == "--camera_model") {
+              record.camera_model = words[i + 1].get<std::string>();
+            } else if (words[i] == "--camera_params") {
+              record.camera_params = words[i + 1].get<std::string>();
+            }
+          }
+        }
         if (stage.value("status", "") == "ran" && stage.contains("seconds") &&
             stage["seconds"].is_number()) {
           ran[stage.at("name").get<std::string>()] =
@@ -300,6 +337,7 @@ Json OptionsJson(const CompareColmapOptions& options) {
           {"matching", options.matching},
           {"num_neighbors", options.num_neighbors},
           {"camera_model", options.camera_model},
+          {"camera_params", options.camera_params},
           {"max_image_size", options.max_image_size},
           {"num_threads", options.num_threads}};
 }
@@ -332,6 +370,10 @@ ColmapRun RunColmapPipeline(const CompareColmapOptions& options,
                       {"--SiftExtraction.max_image_size",
                        std::to_string(options.max_image_size)},
                       {"--SiftExtraction.num_threads", threads}};
+  if (options.calibrated()) {
+    calls[0].options.emplace_back("--ImageReader.camera_params",
+                                  options.camera_params);
+  }
   calls[0].expected_outputs = {database};
   calls[1].command = options.MatcherCommand();
   calls[1].options = {{"--database_path", database},
@@ -346,6 +388,14 @@ ColmapRun RunColmapPipeline(const CompareColmapOptions& options,
                       {"--image_path", image_path},
                       {"--output_path", (colmap_dir / "sparse").string()},
                       {"--Mapper.num_threads", threads}};
+  if (options.calibrated()) {
+    // What bayon was given is known, not estimated, on COLMAP's side too.
+    for (const char* refine : {"--Mapper.ba_refine_focal_length",
+                               "--Mapper.ba_refine_principal_point",
+                               "--Mapper.ba_refine_extra_params"}) {
+      calls[2].options.emplace_back(refine, "0");
+    }
+  }
 
   ColmapRun run;
   run.record["colmap_version"] = ColmapVersion();
@@ -560,6 +610,7 @@ std::string MakeTable(const Json& c) {
   table.Row("model",
             b["model_display"].get<std::string>(),
             m["model_display"].get<std::string>());
+  table.Heading(c["camera"].get<std::string>());
   table.Row("registered images",
             Cell(b["registered"], "") + "/" + num_images,
             Cell(m["registered"], "") + "/" + num_images);
@@ -715,6 +766,10 @@ int RunCompareColmap(int argc, char** argv) {
   app.add_option("--camera_model",
                  options.camera_model,
                  "COLMAP camera model of the one shared camera");
+  app.add_option("--camera_params",
+                 options.camera_params,
+                 "The calibrated camera bayon was given (COLMAP's order): "
+                 "COLMAP gets it too, held fixed; empty: both calibrate");
   app.add_option("--max_image_size",
                  options.max_image_size,
                  "COLMAP SIFT: longest image side in pixels");
@@ -726,11 +781,19 @@ int RunCompareColmap(int argc, char** argv) {
   if (!command.Parse(argc, argv)) return 0;
 
   // Everything is checked before COLMAP runs.
-  options.Check();
   CheckDirectoryExists(options.workspace_path, "--workspace_path");
   const fs::path workspace =
       fs::absolute(options.workspace_path).lexically_normal();
   const PipelineRecord pipeline = ReadPipelineRecord(workspace);
+  // COLMAP knows what bayon knew: the calibrated camera bayon's import was
+  // given (pipeline.json), unless the command line says otherwise.
+  if (app.count("--camera_params") == 0 && !pipeline.camera_params.empty()) {
+    options.camera_params = pipeline.camera_params;
+    if (app.count("--camera_model") == 0 && !pipeline.camera_model.empty()) {
+      options.camera_model = pipeline.camera_model;
+    }
+  }
+  options.Check();
   if (options.bayon_model_path.empty()) {
     options.bayon_model_path = (workspace / "sparse" / "adjusted").string();
   }
@@ -786,6 +849,28 @@ int RunCompareColmap(int argc, char** argv) {
   c["num_images"] = image_names.size();
   c["colmap_version"] = run.record.value("colmap_version", "");
   c["colmap_reused"] = run.reused;
+  // What COLMAP's run was given (a reused run's own record).
+  const Json run_options = run.record.value("options", Json::object());
+  const std::string given_params = run_options.value("camera_params", "");
+  const std::string given_model =
+      run_options.value("camera_model", options.camera_model);
+  c["camera_given_to_colmap"] = given_params.empty()
+                                    ? Json(nullptr)
+                                    : Json({{"model", given_model},
+                                            {"params", given_params},
+                                            {"held_fixed", true}});
+  c["camera"] =
+      given_params.empty()
+          ? StrCat("camera: COLMAP calibrates its own (",
+                   given_model,
+                   "), knowing no calibration")
+          : StrCat(
+                "camera: the calibration bayon was given, given to COLMAP "
+                "too and held fixed (",
+                given_model,
+                " ",
+                given_params,
+                ")");
   c["bayon"] = ModelJson(options.bayon_model_path, bayon_model, folder_images);
   const AdjustmentSigma0 adjustment =
       ReadAdjustmentSigma0(options.bayon_model_path);

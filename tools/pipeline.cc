@@ -423,6 +423,16 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
     Options compare = {{"workspace_path", w},
                        {"image_path", c.image_path},
                        {"num_threads", threads}};
+    // A calibrated camera given to bayon's import is given to COLMAP too
+    // (held fixed there), so that both know the same.
+    const auto import = config.stage_options.find("import");
+    if (import != config.stage_options.end()) {
+      for (const auto& [key, value] : import->second) {
+        if (key == "camera_model" || key == "camera_params") {
+          SetOption(&compare, key, value);
+        }
+      }
+    }
     if (fs::is_directory(In(w, "gt"))) {
       SetOption(&compare, "ground_truth_path", In(w, "gt"));
     }
