@@ -130,6 +130,15 @@ TEST(TextureCommand, ViewDependentBlendingBeatsTheOptimalImageAlone) {
   EXPECT_LT(t["num_unseen_faces"].get<double>(),
             0.2 * t["num_faces"].get<double>());
   EXPECT_EQ(single.texture["num_seam_edges"], t["num_seam_edges"]);
+  // The photographs' light differs (sun, haze, overcast), not only their
+  // exposure: the balance must not make any of them flat to agree (without
+  // its prior, seven of the sixteen took gains of 0.03 to 0.2).
+  for (const auto& [name, image] : t["balance"]["images"].items()) {
+    for (const nlohmann::json& gain : image["gain_bgr"]) {
+      EXPECT_GT(gain.get<double>(), 0.5) << name;
+      EXPECT_LT(gain.get<double>(), 2.0) << name;
+    }
+  }
 
   const double seam_single = single.texture["seam_difference"];
   const double seam_blended = t["seam_difference"];

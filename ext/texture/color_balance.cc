@@ -104,16 +104,18 @@ Eigen::VectorXd SolveChannel(const std::vector<ColorPair>& pairs,
                              const ColorBalanceOptions& options) {
   Eigen::VectorXd x(2 * n);
   x << Eigen::VectorXd::Ones(n), Eigen::VectorXd::Zero(n);
-  const Eigen::VectorXd identity = x;
   for (int iteration = 0; iteration < options.num_iterations; ++iteration) {
     const std::vector<double> r = Residuals(pairs, channel, x, n);
     const double threshold = std::max(options.huber_k * RobustSigma(r), 1e-6);
     Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(2 * n + 2, 2 * n + 2);
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n + 2);
+    std::vector<double> data_weight(n, 0.0);  // of each photograph's pairs
     for (size_t i = 0; i < pairs.size(); ++i) {
       const ColorPair& p = pairs[i];
       const double w =
           p.weight * std::min(1.0, threshold / std::max(std::abs(r[i]), 1e-12));
+      data_weight[p.j] += w;
+      data_weight[p.k] += w;
       const int index[4] = {p.j, n + p.j, p.k, n + p.k};
       const double row[4] = {p.mj[channel], 1.0, -p.mk[channel], -1.0};
       for (int a = 0; a < 4; ++a) {
@@ -122,10 +124,20 @@ Eigen::VectorXd SolveChannel(const std::vector<ColorPair>& pairs,
         }
       }
     }
+    // The prior (Brown and Lowe's gain compensation): each photograph's
+    // gain near 1 and offset near 0, weighed like its overlaps, in units
+    // of the colours' noise. Without it a group of photographs can agree
+    // by all turning flat (gain near 0, offset the mean colour), which
+    // the overlaps alone barely pay for.
+    const double noise = options.sigma_noise / 255.0;
+    const double gain_prior = std::pow(noise / options.sigma_gain, 2);
+    const double offset_prior =
+        std::pow(noise / (options.sigma_offset / 255.0), 2);
     const double ridge = 1e-6 * std::max(kkt.trace() / (2 * n), 1e-12);
-    for (int i = 0; i < 2 * n; ++i) {
-      kkt(i, i) += ridge;
-      rhs[i] += ridge * identity[i];
+    for (int i = 0; i < n; ++i) {
+      kkt(i, i) += ridge + gain_prior * data_weight[i];
+      rhs[i] += ridge + gain_prior * data_weight[i];
+      kkt(n + i, n + i) += ridge + offset_prior * data_weight[i];
     }
     for (int i = 0; i < n; ++i) {
       kkt(2 * n, i) = kkt(i, 2 * n) = 1.0 / n;                  // mean gain
@@ -143,6 +155,9 @@ void ColorBalanceOptions::Check() const {
   CheckOption(num_iterations >= 1, "num_iterations", ">= 1", num_iterations);
   CheckOption(huber_k > 0, "huber_k", "> 0", huber_k);
   CheckOption(max_faces >= 1, "max_faces", ">= 1", max_faces);
+  CheckOption(sigma_noise > 0, "sigma_noise", "> 0", sigma_noise);
+  CheckOption(sigma_gain > 0, "sigma_gain", "> 0", sigma_gain);
+  CheckOption(sigma_offset > 0, "sigma_offset", "> 0", sigma_offset);
   CheckOption(
       saturated > 0 && saturated <= 255, "saturated", "in (0, 255]", saturated);
 }

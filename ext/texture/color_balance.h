@@ -11,7 +11,10 @@
 //        min sum_f sum_{j<k seeing f} rho(a_j m_jf + b_j - a_k m_kf - b_k),
 //    with rho Huber's loss (iteratively reweighted; the scale from the
 //    median absolute residual), so that occlusions the mesh misses,
-//    highlights and misregistered detail do not pull the solution. The
+//    highlights and misregistered detail do not pull the solution, plus
+//    Brown and Lowe's prior that keeps each gain near 1 and each offset
+//    near 0 (without it a group of photographs can agree by all turning
+//    flat: gain near 0, offset the mean colour). The
 //    correction is relative: in each group of photographs linked by shared
 //    faces the mean gain is held at 1 and the mean offset at 0, so the
 //    texture keeps the photographs' average exposure and white balance. A
@@ -60,6 +63,12 @@ struct ColorBalanceOptions {
   float saturated = 250.0f;
   // Faces used at most (evenly spread); enough for a few hundred unknowns.
   int max_faces = 100000;
+  // The prior of Brown and Lowe's gain compensation (IJCV 2007: 10 grey
+  // levels and 0.1): the colours' noise, and how far a gain and an offset
+  // (grey levels) are expected to stray from 1 and 0.
+  double sigma_noise = 10;
+  double sigma_gain = 1.0;
+  double sigma_offset = 100;
   void Check() const;
 };
 
