@@ -5,7 +5,7 @@
 #             views in sun, haze and overcast, 4 held-out viewpoints), its
 #             true orientation and calibration; textured twice: the true
 #             geometry (texture mapping alone) and the mesh bayon makes
-#             (`dense` with 5 masters, `mesh --method cylinder`); judged by
+#             (`dense` with its defaults, `mesh --method cylinder`); judged by
 #             `bayon evaluate` from the held-out viewpoints against the true
 #             texture (PSNR and SSIM after a per-channel gain and offset: the
 #             photographs' light is not the albedo) and by the seam measure
