@@ -326,9 +326,7 @@ int EvaluateAgainstPhotographs(const std::string& textured_mesh_path,
   const Scene scene = ReadOrientedModel(input_path, "");
   std::vector<std::pair<std::string, cv::Mat>> photographs;
   for (const std::string& name : image_names) {
-    cv::Mat bgr = ReadImage(image_path + "/" + name, ImageReadMode::kColor);
-    if (bgr.depth() == CV_16U) bgr.convertTo(bgr, CV_8U, 1.0 / 257.0);
-    photographs.emplace_back(name, bgr);
+    photographs.emplace_back(name, ReadImageColor8(image_path + "/" + name));
   }
   cv::Mat texture;
   const TriangleMesh model =

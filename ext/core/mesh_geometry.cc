@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/core/mesh_geometry.h"
 
+#include "ext/core/union_find.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -40,24 +42,6 @@ std::vector<FaceEdge> SortedFaceEdges(const TriangleMesh& mesh) {
       });
   return edges;
 }
-
-class UnionFind {
- public:
-  explicit UnionFind(size_t n) : parent_(n) {
-    std::iota(parent_.begin(), parent_.end(), size_t{0});
-  }
-  size_t Find(size_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void Union(size_t a, size_t b) { parent_[Find(a)] = Find(b); }
-
- private:
-  std::vector<size_t> parent_;
-};
 
 // Index of the corner of face f that holds vertex v.
 int CornerOf(const TriangleMesh& mesh, int f, int v) {

@@ -293,16 +293,6 @@ std::vector<MasterSelection> SelectMasters(const Scene& scene,
   return selections;
 }
 
-namespace {
-
-cv::Mat ReadColor8(const std::string& path) {
-  cv::Mat color = ReadImage(path, ImageReadMode::kColor);
-  if (color.depth() == CV_16U) color.convertTo(color, CV_8U, 1.0 / 257);
-  return color;
-}
-
-}  // namespace
-
 DenseImage LoadDenseImage(const Scene& scene,
                           image_t image_id,
                           const std::string& image_path,
@@ -335,7 +325,7 @@ DenseImage LoadDenseImage(const Scene& scene,
     cv::GaussianBlur(image.gray, blurred, cv::Size(), highpass_sigma_px);
     image.gray = image.gray - blurred + 128.0f;
   }
-  if (color) image.color = ReadColor8(path);
+  if (color) image.color = ReadImageColor8(path);
   return image;
 }
 
@@ -346,7 +336,7 @@ double AngleBetweenDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 cv::Mat LoadDenseColor(const Scene& scene,
                        image_t image_id,
                        const std::string& image_path) {
-  return ReadColor8(image_path + "/" + scene.images.at(image_id).name);
+  return ReadImageColor8(image_path + "/" + scene.images.at(image_id).name);
 }
 
 std::map<image_t, DenseImage> LoadDenseImages(

@@ -121,6 +121,16 @@ cv::Mat ReadImage(const std::string& path, ImageReadMode mode) {
   return image;
 }
 
+cv::Mat ReadImageColor8(const std::string& path) {
+  cv::Mat bgr = ReadImage(path, ImageReadMode::kColor);
+  if (bgr.depth() == CV_16U) {
+    bgr.convertTo(bgr, CV_8U, 1.0 / 257.0);
+  } else if (bgr.depth() != CV_8U) {
+    ThrowInputError(path, ": needs 8 or 16 bits per channel");
+  }
+  return bgr;
+}
+
 cv::Mat ReadImageGrayFloat(const std::string& path) {
   cv::Mat image = ReadImage(path, ImageReadMode::kUnchanged);
   if (image.channels() == 4) {

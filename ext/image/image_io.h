@@ -31,6 +31,10 @@ enum class ImageReadMode {
 cv::Mat ReadImage(const std::string& path,
                   ImageReadMode mode = ImageReadMode::kUnchanged);
 
+// Three channels (BGR), CV_8U: 16-bit images divided by 257. Throws
+// InputError like ReadImage, and for another depth.
+cv::Mat ReadImageColor8(const std::string& path);
+
 // One channel, CV_32F, values scaled to [0, 255] whatever the stored depth
 // (16-bit images are divided by 257), colour converted by luminance.
 cv::Mat ReadImageGrayFloat(const std::string& path);

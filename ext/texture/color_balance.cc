@@ -2,6 +2,7 @@
 #include "ext/texture/color_balance.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/union_find.h"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -12,7 +13,6 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
-#include <numeric>
 
 namespace bayon {
 namespace {
@@ -179,24 +179,18 @@ std::vector<GainOffset> BalanceExposures(
   // fix only the ratios within a group, so each group keeps its own mean
   // gain 1 and mean offset 0, and a photograph in no pair stays as it is
   // (one mean over all would let the groups trade their gains freely).
-  std::vector<int> parent(num_images);
-  std::iota(parent.begin(), parent.end(), 0);
-  const auto root = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (const ColorPair& p : pairs) parent[root(p.j)] = root(p.k);
-  std::map<int, std::vector<ColorPair>> groups;  // by root, group indices
-  std::vector<int> index_in_group(num_images, -1);
-  std::map<int, std::vector<int>> members;  // by root, global indices
-  for (int j = 0; j < num_images; ++j) members[root(j)].push_back(j);
-  for (auto& [r, images] : members) {
-    for (size_t i = 0; i < images.size(); ++i) {
-      index_in_group[images[i]] = static_cast<int>(i);
-    }
+  UnionFind linked(num_images);
+  for (const ColorPair& p : pairs) linked.Union(p.j, p.k);
+  std::map<size_t, std::vector<int>> members;  // by root: the photographs
+  std::vector<int> index_in_group(num_images);
+  for (int j = 0; j < num_images; ++j) {
+    std::vector<int>& group = members[linked.Find(j)];
+    index_in_group[j] = static_cast<int>(group.size());
+    group.push_back(j);
   }
+  std::map<size_t, std::vector<ColorPair>> groups;  // by root, group indices
   for (ColorPair p : pairs) {
-    const int r = root(p.j);
+    const size_t r = linked.Find(p.j);
     p.j = index_in_group[p.j];
     p.k = index_in_group[p.k];
     groups[r].push_back(p);

@@ -4,6 +4,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/parallel.h"
 #include "ext/core/progress.h"
+#include "ext/core/union_find.h"
 #include "ext/image/image_io.h"
 #include "ext/image/interpolation.h"
 #include "ext/image/radiometry.h"
@@ -140,15 +141,6 @@ cv::Mat Preprocess(const cv::Mat& bgr,
     }
   }
   return bgr;
-}
-
-// Union-find over faces.
-int FindRoot(std::vector<int>* parent, int i) {
-  while ((*parent)[i] != i) {
-    (*parent)[i] = (*parent)[(*parent)[i]];
-    i = (*parent)[i];
-  }
-  return i;
 }
 
 // The mesh's edges as (smaller vertex, larger vertex, face), sorted, so
@@ -538,11 +530,7 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
                                             const TextureOptions& options) {
   options.Check();
   for (const std::string& name : options.exclude_images) {
-    if (!std::any_of(scene.images.begin(),
-                     scene.images.end(),
-                     [&](const auto& id_image) {
-                       return id_image.second.name == name;
-                     })) {
+    if (scene.FindImageByName(name) == nullptr) {
       ThrowInputError("--exclude_images: the model has no image '", name, "'");
     }
   }
@@ -575,12 +563,7 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
   ParallelFor(static_cast<int>(images.size()), options.num_threads, [&](int i) {
     TextureImage& t = images[i];
     const std::string path = image_path + "/" + t.name;
-    cv::Mat bgr = ReadImage(path, ImageReadMode::kColor);
-    if (bgr.depth() == CV_16U) {
-      bgr.convertTo(bgr, CV_8U, 1.0 / 257.0);
-    } else if (bgr.depth() != CV_8U) {
-      ThrowInputError(path, ": needs 8 or 16 bits per channel");
-    }
+    const cv::Mat bgr = ReadImageColor8(path);
     if (bgr.cols != static_cast<int>(t.camera->width) ||
         bgr.rows != static_cast<int>(t.camera->height)) {
       ThrowInputError(path,
@@ -750,38 +733,35 @@ TexturedMesh MapTexture(const TriangleMesh& input,
   }
 
   // 4. Charts: faces joined across edges where they share the optimal image.
-  std::vector<int> parent(num_faces);
-  std::iota(parent.begin(), parent.end(), 0);
+  UnionFind joined(num_faces);
   for (size_t i = 0; i + 1 < edges.size(); ++i) {
     for (size_t k = i + 1; k < edges.size() && edges[k].SameEdge(edges[i]);
          ++k) {
       const int f = edges[i].face, g = edges[k].face;
       if (source[f] >= 0 && source[f] == source[g]) {
-        parent[FindRoot(&parent, f)] = FindRoot(&parent, g);
+        joined.Union(f, g);
       }
     }
   }
   std::vector<Chart> charts;
   std::vector<int> chart_of_root(num_faces, -1);
+  std::vector<int> chart_of_face(num_faces, -1);  // -1: unseen
   Chart unseen;
   for (int face = 0; face < num_faces; ++face) {
     if (source[face] < 0) {
       unseen.faces.push_back(face);
       continue;
     }
-    const int root = FindRoot(&parent, face);
-    if (chart_of_root[root] < 0) {
-      chart_of_root[root] = static_cast<int>(charts.size());
+    int& chart = chart_of_root[joined.Find(face)];
+    if (chart < 0) {
+      chart = static_cast<int>(charts.size());
       charts.emplace_back();
       charts.back().image = source[face];
     }
-    charts[chart_of_root[root]].faces.push_back(face);
+    charts[chart].faces.push_back(face);
+    chart_of_face[face] = chart;
   }
   report.num_charts = static_cast<int>(charts.size());
-  std::vector<int> chart_of_face(num_faces, -1);
-  for (size_t c = 0; c < charts.size(); ++c) {
-    for (int face : charts[c].faces) chart_of_face[face] = static_cast<int>(c);
-  }
 
   // 6. Seam levelling: corner adjustments from the colours the faces would
   // take on both sides of each chart border.
