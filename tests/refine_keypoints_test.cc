@@ -47,8 +47,8 @@ struct MapperResult {
   double rotation_rms_deg = 0;
 };
 
-// Stock `colmap mapper` on a copy of `database_path`; the largest model,
-// evaluated against the truth.
+// Stock `colmap mapper` on a copy of `database_path` with its camera held
+// fixed; the largest model, evaluated against the truth.
 MapperResult MapAndEvaluate(const std::string& database_path,
                             const std::string& truth_path,
                             const std::string& dir) {
@@ -56,13 +56,21 @@ MapperResult MapAndEvaluate(const std::string& database_path,
   const std::string copy = dir + "/database.db";
   fs::create_directories(dir + "/sparse");
   CopyDatabaseForColmap(database_path, copy);
+  // The database's camera is the calibration compare_colmap gave COLMAP
+  // (the one bayon's pipeline was given): held fixed, as there.
   RunColmapOk({"mapper",
                "--database_path",
                copy,
                "--image_path",
                images,
                "--output_path",
-               dir + "/sparse"});
+               dir + "/sparse",
+               "--Mapper.ba_refine_focal_length",
+               "0",
+               "--Mapper.ba_refine_principal_point",
+               "0",
+               "--Mapper.ba_refine_extra_params",
+               "0"});
   std::string best;
   size_t best_size = 0;
   for (const auto& entry : fs::directory_iterator(dir + "/sparse")) {
