@@ -300,6 +300,18 @@ void ParseHeader(const std::string& path,
     }
   }
   if (!have_format) ThrowInputError(path, ": PLY header has no format line");
+  // Records without properties take no bytes, so nothing in the file bounds
+  // their count: reading 2^60 of them would never end.
+  for (const PlyElement& element : *elements) {
+    if (element.count > 0 && element.properties.empty()) {
+      ThrowInputError(path,
+                      ": element ",
+                      element.name,
+                      " has ",
+                      element.count,
+                      " records but no properties");
+    }
+  }
 }
 
 }  // namespace
