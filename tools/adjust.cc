@@ -103,11 +103,11 @@ int RunAdjust(int argc, char** argv) {
   app.add_option("--max_correlation",
                  options.max_correlation,
                  "Correlations above this are flagged");
-  app.add_option("--max_exterior_correlation",
-                 options.max_exterior_correlation,
-                 "Self-calibration (significant): a parameter correlated "
-                 "above this with an exterior orientation is not "
-                 "determinable and removed");
+  app.add_option("--max_interior_sigma",
+                 options.max_interior_sigma,
+                 "Self-calibration (significant): the interior orientation "
+                 "is removed for such a correlation only with a standard "
+                 "deviation above this share of the image diagonal");
   app.add_option("--two_steps",
                  options.two_steps,
                  "1: adjust without self-calibration first (the paper's "

@@ -363,12 +363,18 @@ class Adjuster {
               << " px, " << count << " observations rejected";
   }
 
-  // Stepwise removal of the least significant additional parameter.
   // Before the parameters are estimated: at the stable block of step 1 the
   // normal equations with every candidate free show which ones the
   // exterior orientations could imitate (correlation above
   // max_exterior_correlation); those are removed one at a time, the most
-  // correlated first, so that step 2 does not wander off with them.
+  // correlated first, so that step 2 does not wander off with them. The
+  // interior orientation (camera constant and principal point) is removed
+  // only when it is also imprecise, with a standard deviation above
+  // max_interior_sigma of the image diagonal: a principal point 16 px off
+  // the centre of a narrow-angle camera correlates 0.99 with the rotations,
+  // yet with a standard deviation of 1 px it is well determined, and holding
+  // it at the centre turns the rotations by the 0.3 deg it is off
+  // (fountain-P11). The t-test then decides.
   void RemoveUndeterminableParameters() {
     PrecisionOptions precision_options;
     precision_options.compute_residual_cofactors = false;
@@ -380,21 +386,69 @@ class Adjuster {
         return;  // step 2 and the statistics will say which one
       }
       ParameterEstimate imitated;
+      std::string reason;
       for (const ParameterEstimate& estimate : FreeEstimates(precision)) {
-        if (estimate.exterior_correlation > imitated.exterior_correlation) {
+        std::string why;
+        if (estimate.exterior_correlation > imitated.exterior_correlation &&
+            Undeterminable(estimate, &why)) {
           imitated = estimate;
+          reason = why;
         }
       }
-      if (imitated.camera_idx < 0 ||
-          imitated.exterior_correlation <= options_.max_exterior_correlation) {
-        return;
-      }
-      RemoveParameter(imitated,
-                      StrCat("not determinable: correlation ",
-                             imitated.exterior_correlation,
-                             " with an exterior orientation > ",
-                             options_.max_exterior_correlation));
+      if (imitated.camera_idx < 0) return;
+      RemoveParameter(imitated, "not determinable: " + reason);
     }
+  }
+
+  // Whether `estimate` is to be removed before step 2 (above), and why.
+  bool Undeterminable(const ParameterEstimate& estimate,
+                      std::string* reason) const {
+    const BlockCamera& camera = block_->cameras[estimate.camera_idx];
+    const std::vector<int> interior = InteriorParameters(camera.camera);
+    const bool is_interior =
+        std::find(interior.begin(), interior.end(), estimate.param_idx) !=
+        interior.end();
+    if (estimate.exterior_correlation > options_.max_exterior_correlation) {
+      const double sigma_px = estimate.std_dev * PixelsPerUnit(camera.camera);
+      const double diagonal =
+          std::hypot(static_cast<double>(camera.camera.width),
+                     static_cast<double>(camera.camera.height));
+      if (!is_interior || sigma_px > options_.max_interior_sigma * diagonal) {
+        *reason = StrCat("correlation ",
+                         estimate.exterior_correlation,
+                         " with an exterior orientation > ",
+                         options_.max_exterior_correlation,
+                         is_interior
+                             ? StrCat(", standard deviation ", sigma_px, " px")
+                             : std::string());
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // The interior orientation among a camera's parameters: Brown/Beyer's
+  // corrections dc, dx0, dy0; a COLMAP model's focal length(s) and
+  // principal point.
+  static std::vector<int> InteriorParameters(const Camera& camera) {
+    if (camera.model_id == CameraModelId::kBrownBeyer) {
+      return {brown::kDc, brown::kDx0, brown::kDy0};
+    }
+    const CameraModelInfo& info = camera.ModelInfo();
+    std::vector<int> idxs = info.focal_idxs;
+    idxs.insert(idxs.end(),
+                info.principal_point_idxs.begin(),
+                info.principal_point_idxs.end());
+    return idxs;
+  }
+
+  // Pixels per unit of the interior orientation: Brown/Beyer's are
+  // millimetres of the image frame, COLMAP's pixels.
+  static double PixelsPerUnit(const Camera& camera) {
+    if (camera.model_id == CameraModelId::kBrownBeyer) {
+      return 1 / camera.DefaultFrame().MeanPitchMm();
+    }
+    return 1;
   }
 
   // The estimates of every free candidate parameter.
@@ -577,6 +631,10 @@ void AdjustmentOptions::Check() const {
               "AdjustmentOptions.max_correlation",
               "in (0, 1]",
               max_correlation);
+  CheckOption(max_interior_sigma > 0,
+              "AdjustmentOptions.max_interior_sigma",
+              "> 0",
+              max_interior_sigma);
   CheckOption(snooping_critical_value > 0,
               "AdjustmentOptions.snooping_critical_value",
               "> 0",

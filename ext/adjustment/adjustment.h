@@ -56,9 +56,14 @@ struct AdjustmentOptions {
   // Correlations above this between estimated camera parameters are
   // flagged in the report.
   double max_correlation = 0.9;
-  // Determinability: with kSignificant a parameter correlated above this
-  // with an exterior orientation element is removed before the t-test.
+  // Determinability, with kSignificant, before the t-test: a parameter
+  // correlated above max_exterior_correlation with an exterior orientation
+  // element is removed; the interior orientation (dc, dx0, dy0; a COLMAP
+  // model's focal length and principal point) only when it is also
+  // imprecise, with a standard deviation above max_interior_sigma of the
+  // image diagonal (adjustment.cc, RemoveUndeterminableParameters).
   double max_exterior_correlation = 0.99;
+  double max_interior_sigma = 0.01;
   BlunderDetection blunder_detection = BlunderDetection::kRobust;
   // Baarda's critical value for the normalised residual w (alpha0 = 0.1 %,
   // beta0 = 80 %, the classic 3.29).
