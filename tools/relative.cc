@@ -50,6 +50,13 @@ int RunRelative(int argc, char** argv) {
   app.add_option("--overwrite",
                  options.overwrite,
                  "1: orient pairs that were oriented before again");
+  app.add_option("--estimate_focal_length",
+                 options.estimate_focal_length,
+                 "1: a camera without calibration or EXIF focal length gets "
+                 "one from its strongest pairs before they are oriented");
+  app.add_option("--focal_max_num_pairs",
+                 options.focal_max_num_pairs,
+                 "Pairs that estimate an unknown focal length");
   app.add_option(
       "--num_threads", options.num_threads, "Threads (-1 = all cores)");
   app.add_option("--log_path",
@@ -71,8 +78,22 @@ int RunRelative(int argc, char** argv) {
     num_blunders += pair.num_blunders;
     sum_sigma0 += pair.sigma0_px;
   }
+  std::string focal_lengths;
+  for (const FocalLengthReport& focal : summary.focal_lengths) {
+    focal_lengths += StrCat(
+        "camera ",
+        focal.camera_id,
+        focal.estimate.success
+            ? StrCat(": focal length ",
+                     focal.estimate.focal_length_px,
+                     " px +- ",
+                     100 * focal.estimate.relative_sigma,
+                     " % from the photographs; ")
+            : StrCat(": focal length unknown, ", focal.estimate.reason, "; "));
+  }
   command.PrintSummary(
-      StrCat(summary.num_oriented,
+      StrCat(focal_lengths,
+             summary.num_oriented,
              " pairs oriented (",
              num_inliers,
              " inliers, ",

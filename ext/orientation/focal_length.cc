@@ -79,8 +79,8 @@ class FocalScore {
 
   // Each pair's value at f.
   std::vector<Value> PerPair(double focal_px) const {
-    const double t2 = options_.inlier_threshold_px *
-                      options_.inlier_threshold_px;
+    const double t2 =
+        options_.inlier_threshold_px * options_.inlier_threshold_px;
     std::vector<Value> values(pairs_.size());
     ParallelFor(
         static_cast<int>(pairs_.size()), options_.num_threads, [&](int k) {
@@ -137,9 +137,10 @@ class FocalScore {
 
 }  // namespace
 
-FocalLengthEstimate EstimateFocalLength(const std::vector<ConjugatePoints>& pairs,
-                                        double long_side_px,
-                                        const FocalLengthOptions& options) {
+FocalLengthEstimate EstimateFocalLength(
+    const std::vector<ConjugatePoints>& pairs,
+    double long_side_px,
+    const FocalLengthOptions& options) {
   options.Check();
   CheckOption(long_side_px > 0, "long_side_px", "> 0", long_side_px);
   FocalLengthEstimate estimate;
@@ -206,11 +207,12 @@ FocalLengthEstimate EstimateFocalLength(const std::vector<ConjugatePoints>& pair
   const int best = static_cast<int>(
       std::min_element(scores.begin(), scores.end()) - scores.begin());
   if (best == 0 || best + 1 == static_cast<int>(xs.size())) {
-    estimate.reason = StrCat("the photographs do not fix the focal length "
-                             "in the range searched: the best value is at "
-                             "its end (",
-                             std::exp(xs[best]) / long_side_px,
-                             " x the long side)");
+    estimate.reason = StrCat(
+        "the photographs do not fix the focal length "
+        "in the range searched: the best value is at "
+        "its end (",
+        std::exp(xs[best]) / long_side_px,
+        " x the long side)");
     return estimate;
   }
 
@@ -268,17 +270,18 @@ FocalLengthEstimate EstimateFocalLength(const std::vector<ConjugatePoints>& pair
                score(estimate.focal_length_px / options.min_rise_ratio).score) /
       estimate.score;
   if (!(rise >= options.min_rise)) {
-    estimate.reason = StrCat("the photographs do not fix the focal length: "
-                             "its score rises by only ",
-                             100 * (rise - 1),
-                             " % at ",
-                             options.min_rise_ratio,
-                             " times or 1 / ",
-                             options.min_rise_ratio,
-                             " times the best value (",
-                             estimate.focal_length_px,
-                             " px); give the focal length (EXIF, "
-                             "--focal_length_mm or a calibrated camera)");
+    estimate.reason = StrCat(
+        "the photographs do not fix the focal length: "
+        "its score rises by only ",
+        100 * (rise - 1),
+        " % at ",
+        options.min_rise_ratio,
+        " times or 1 / ",
+        options.min_rise_ratio,
+        " times the best value (",
+        estimate.focal_length_px,
+        " px); give the focal length (EXIF, "
+        "--focal_length_mm or a calibrated camera)");
     return estimate;
   }
   estimate.success = true;

@@ -97,8 +97,9 @@ struct FocalLengthEstimate {
 // `pairs`: each pair's conjugate points as image vectors of the guessed
 // camera (only x and y are used; z is replaced by -f). `long_side_px`: the
 // image's longer side, which scales the grid.
-FocalLengthEstimate EstimateFocalLength(const std::vector<ConjugatePoints>& pairs,
-                                        double long_side_px,
-                                        const FocalLengthOptions& options);
+FocalLengthEstimate EstimateFocalLength(
+    const std::vector<ConjugatePoints>& pairs,
+    double long_side_px,
+    const FocalLengthOptions& options);
 
 }  // namespace bayon

@@ -39,16 +39,16 @@ std::vector<ConjugatePoints> RingPairs(double focal_px,
   std::vector<Rigid3d> poses;
   for (int k = 0; k < num_stations; ++k) {
     const double azimuth = k * step_deg * kDeg;
-    const Eigen::Vector3d station(
-        10 * std::cos(azimuth),
-        10 * std::sin(azimuth),
-        4 + scatter_m * 2 * (unit(rng) - 0.5));
+    const Eigen::Vector3d station(10 * std::cos(azimuth),
+                                  10 * std::sin(azimuth),
+                                  4 + scatter_m * 2 * (unit(rng) - 0.5));
     const Eigen::Vector3d aim =
         centre + scatter_m * (RandomVector<3>(unit, rng) -
                               Eigen::Vector3d::Constant(0.5));
     poses.push_back(LookAt(station, aim));
   }
-  const auto project = [&](const Rigid3d& pose, const Eigen::Vector3d& X,
+  const auto project = [&](const Rigid3d& pose,
+                           const Eigen::Vector3d& X,
                            Eigen::Vector2d* pixel) {
     const Eigen::Vector3d p = pose * X;
     *pixel = Eigen::Vector2d(focal_px * p.x() / p.z() + kWidth / 2,
@@ -126,8 +126,10 @@ TEST(FocalLength, AWideAngleAndATelephotoLensAlike) {
 }
 
 TEST(FocalLength, ATurntableDoesNotFixIt) {
-  const FocalLengthEstimate estimate = EstimateFocalLength(
-      RingPairs(1750, 2160, 8, 25, 0.3, 0.05, 5, 0), kWidth, FocalLengthOptions());
+  const FocalLengthEstimate estimate =
+      EstimateFocalLength(RingPairs(1750, 2160, 8, 25, 0.3, 0.05, 5, 0),
+                          kWidth,
+                          FocalLengthOptions());
   EXPECT_FALSE(estimate.success);
   EXPECT_NE(estimate.reason.find("do not fix the focal length"),
             std::string::npos)

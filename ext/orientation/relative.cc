@@ -10,13 +10,21 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <iomanip>
 #include <map>
 #include <sstream>
 
 namespace bayon {
 
-void RelativeOptions::Check() const { estimation.Check(); }
+void RelativeOptions::Check() const {
+  estimation.Check();
+  focal.Check();
+  CheckOption(focal_max_num_pairs >= 1,
+              "RelativeOptions.focal_max_num_pairs",
+              ">= 1",
+              focal_max_num_pairs);
+}
 
 ConjugatePoints PairConjugatePoints(const FeatureKeypoints& keypoints1,
                                     const FeatureKeypoints& keypoints2,
@@ -187,6 +195,99 @@ void LogPair(const PairOrientationReport& report) {
   }
 }
 
+// Estimates the focal length of every camera whose images' vectors are
+// not calibrated and that took a pair to orient (see the header), writes it
+// to the cameras table and renews those images' vectors.
+std::vector<FocalLengthReport> EstimateUnknownFocalLengths(
+    Database* database,
+    const std::vector<DatabaseImage>& images,
+    const std::vector<PairJob>& jobs,
+    const std::map<image_t, FeatureKeypoints>& keypoints,
+    const RelativeOptions& options,
+    std::map<camera_t, Camera>* cameras,
+    std::map<image_t, ImageVectors>* vectors) {
+  std::map<image_t, camera_t> camera_of_image;
+  for (const DatabaseImage& image : images) {
+    camera_of_image[image.image_id] = image.camera_id;
+  }
+  // Each uncalibrated camera's pairs to orient, strongest first.
+  std::map<camera_t, std::vector<const PairJob*>> pairs_of_camera;
+  for (const PairJob& job : jobs) {
+    const image_t id1 = job.report.image_id1, id2 = job.report.image_id2;
+    if (job.matches.rows() == 0 || !camera_of_image.count(id1) ||
+        !camera_of_image.count(id2)) {
+      continue;
+    }
+    const camera_t camera_id = camera_of_image.at(id1);
+    if (camera_of_image.at(id2) != camera_id || vectors->at(id1).calibrated()) {
+      continue;
+    }
+    pairs_of_camera[camera_id].push_back(&job);
+  }
+  std::vector<FocalLengthReport> reports;
+  for (auto& [camera_id, pairs] : pairs_of_camera) {
+    Timer timer;
+    std::sort(pairs.begin(), pairs.end(), [](const auto* a, const auto* b) {
+      return a->matches.rows() > b->matches.rows();
+    });
+    if (static_cast<int>(pairs.size()) > options.focal_max_num_pairs) {
+      pairs.resize(options.focal_max_num_pairs);
+    }
+    std::vector<ConjugatePoints> points;
+    for (const PairJob* job : pairs) {
+      const image_t id1 = job->report.image_id1, id2 = job->report.image_id2;
+      std::vector<int> rows;
+      points.push_back(PairConjugatePoints(
+          keypoints.at(id1),
+          keypoints.at(id2),
+          job->matches,
+          options.use_subpixel_points ? job->match_record : std::nullopt,
+          vectors->at(id1),
+          vectors->at(id2),
+          &rows));
+    }
+    Camera& camera = cameras->at(camera_id);
+    FocalLengthReport report;
+    report.camera_id = camera_id;
+    report.guess_px = camera.MeanFocalLengthPx();
+    FocalLengthOptions focal = options.focal;
+    focal.num_threads = options.num_threads;
+    report.estimate = EstimateFocalLength(
+        points,
+        static_cast<double>(std::max(camera.width, camera.height)),
+        focal);
+    report.seconds = timer.Seconds();
+    for (const auto& [f, score] : report.estimate.grid) {
+      VLOG(1) << "focal " << f << " px: score " << score;
+    }
+    if (report.estimate.success) {
+      for (int idx : camera.ModelInfo().focal_idxs) {
+        camera.params[idx] = report.estimate.focal_length_px;
+      }
+      camera.has_prior_focal_length = true;
+      database->UpdateCamera(camera);
+      for (const DatabaseImage& image : images) {
+        if (image.camera_id != camera_id) continue;
+        vectors->at(image.image_id) = ImageVectors::FromDatabase(
+            database, image, options.assume_zero_distortion);
+      }
+      LOG(INFO) << std::fixed << std::setprecision(1) << "Camera " << camera_id
+                << ": focal length " << report.estimate.focal_length_px
+                << " px (+- " << 100 * report.estimate.relative_sigma
+                << " %) from the photographs (" << report.estimate.num_pairs
+                << " pairs, " << report.estimate.num_points
+                << " points; the guess was " << report.guess_px << " px), "
+                << std::setprecision(2) << report.seconds << " s";
+    } else {
+      LOG(WARNING) << "Camera " << camera_id
+                   << ": the focal length stays the guess (" << report.guess_px
+                   << " px): " << report.estimate.reason;
+    }
+    reports.push_back(std::move(report));
+  }
+  return reports;
+}
+
 }  // namespace
 
 RelativeSummary OrientImagePairs(const std::string& database_path,
@@ -262,6 +363,12 @@ RelativeSummary OrientImagePairs(const std::string& database_path,
     jobs.push_back(std::move(job));
   }
 
+  RelativeSummary summary;
+  if (options.estimate_focal_length) {
+    summary.focal_lengths = EstimateUnknownFocalLengths(
+        &database, images, jobs, keypoints, options, &colmap_cameras, &vectors);
+  }
+
   std::vector<int> todo;
   for (int i = 0; i < static_cast<int>(jobs.size()); ++i) {
     if (!jobs[i].report.skipped && jobs[i].report.reason.empty()) {
@@ -289,7 +396,6 @@ RelativeSummary OrientImagePairs(const std::string& database_path,
       });
   progress.Finish();
 
-  RelativeSummary summary;
   for (const PairJob& job : jobs) {
     LogPair(job.report);
     if (job.report.skipped) {

@@ -13,10 +13,21 @@
 // bayon_relative_orientation row (ext/colmap/table_relative.h). A pair that
 // cannot be oriented gets only its bayon row, with the reason, and no
 // two-view geometry: never anything half-done.
+//
+// A camera whose focal length is unknown (no bayon_calibration, no EXIF or
+// given lens: COLMAP's guess of 1.2 x the long side) first gets one from the
+// photographs: from its strongest pairs (the most matches) by
+// focal_length.h. The estimate replaces the guess in the cameras table, with
+// COLMAP's prior_focal_length flag set, and the pairs are then oriented as
+// calibrated, so that strip can chain them and adjust refines the focal
+// length with everything else. A camera whose focal length the photographs
+// do not fix keeps its guess, with the reason in the log; its pairs stay
+// uncalibrated.
 #pragma once
 
 #include "ext/colmap/database.h"
 #include "ext/colmap/table_matches.h"
+#include "ext/orientation/focal_length.h"
 #include "ext/orientation/image_vectors.h"
 #include "ext/orientation/relative_orientation.h"
 
@@ -36,6 +47,11 @@ struct RelativeOptions {
   bool use_subpixel_points = true;
   // Re-orient pairs that have a two-view geometry or a bayon row already.
   bool overwrite = false;
+  // Estimate unknown focal lengths (above) from at most this many pairs of
+  // the camera.
+  bool estimate_focal_length = true;
+  int focal_max_num_pairs = 20;
+  FocalLengthOptions focal;
   int num_threads = -1;  // pairs in parallel; -1 = all cores
   void Check() const;
 };
@@ -62,7 +78,16 @@ struct PairOrientationReport {
   double seconds = 0;
 };
 
+// A camera's focal length estimated from the photographs.
+struct FocalLengthReport {
+  camera_t camera_id = kInvalidCameraId;
+  double guess_px = 0;  // COLMAP's
+  FocalLengthEstimate estimate;
+  double seconds = 0;
+};
+
 struct RelativeSummary {
+  std::vector<FocalLengthReport> focal_lengths;
   std::vector<PairOrientationReport> pairs;
   int num_oriented = 0;
   int num_failed = 0;
