@@ -199,6 +199,9 @@ TEST(Pipeline, BadInputIsRefusedBeforeAnyWork) {
   }
   ExpectRefused(
       dir, images, {"--to_stage", "meshing"}, {"unknown stage 'meshing'"});
+  // One photograph: nothing to match, said before the first stage.
+  ExpectRefused(dir, images, {}, {"one image", "two or more"});
+  EXPECT_FALSE(fs::exists(dir + "/ws"));
 
   // A second photograph of another size (another camera) with one camera
   // for all: refused by import, the first stage, before anything is written.

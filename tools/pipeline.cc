@@ -766,7 +766,8 @@ int RunPipeline(int argc, char** argv) {
   }
   if (c.image_path.empty()) c.image_path = In(c.workspace, "images");
   CheckDirectoryExists(c.image_path, "--image_path");
-  if (ListImages(c.image_path).empty()) {
+  const size_t num_images = ListImages(c.image_path).size();
+  if (num_images == 0) {
     ThrowInputError(c.image_path,
                     ": no images found (looked for jpg, png, tif, bmp, "
                     "pgm/ppm, webp, jp2, exr, hdr)");
@@ -792,6 +793,13 @@ int RunPipeline(int argc, char** argv) {
         "--from_stage ", from_stage, " comes after --to_stage ", to_stage);
   }
   CheckStageOptions(stages, config.description);
+  // Matching and everything after it need a second photograph.
+  if (num_images < 2 && stages[last].name != "import" &&
+      stages[last].name != "interior" && stages[last].name != "features") {
+    ThrowInputError(c.image_path,
+                    ": one image; a model needs two or more overlapping "
+                    "photographs (--to_stage features stops before matching)");
+  }
 
   // Every stage logs in full to W/logs/<stage>.log; the terminal shows the
   // pipeline's progress, the stages' progress bars, summaries and warnings.

@@ -141,9 +141,11 @@ class StripBuilder {
                           ": camera ",
                           row.camera_id,
                           " has no calibration (its focal length is COLMAP's "
-                          "default guess and there is no bayon_calibration); "
-                          "give the lens with bayon import --focal_length_mm "
-                          "or calibrate the camera first");
+                          "default guess, there is no bayon_calibration, and "
+                          "bayon relative could not estimate it from the "
+                          "photographs: its log says why); give the lens "
+                          "with bayon import --focal_length_mm or calibrate "
+                          "the camera first");
         }
         CheckCameraCalibration(camera, database_path_);
         camera_idxs[row.camera_id] = static_cast<int>(colmap_cameras_.size());
