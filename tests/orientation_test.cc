@@ -389,6 +389,21 @@ TEST(Orientation, TempleBundleThroughBayonsChain) {
   EXPECT_LT(evaluation.center_rms_relative, 0.003);
 }
 
+// The Strecha truth of `set` (e.g. "fountain-P11") as a COLMAP model in
+// dir/truth.
+Scene ImportStrechaTruth(const std::string& set, const std::string& dir) {
+  Run({"import_ground_truth",
+       "--format",
+       "strecha",
+       "--input_path",
+       testing::DataPath(set + "/gt_dense_cameras"),
+       "--output_path",
+       dir + "/truth",
+       "--image_path",
+       testing::DataPath(set + "/images")});
+  return ReadModel(dir + "/truth");
+}
+
 // Issue 6's real facade: fountain-P11 (11 photographs of 3072 x 2048,
 // undistorted by their authors) through bayon's chain with the calibrated
 // camera, free network, judged against the Strecha cameras in mm.
@@ -402,16 +417,7 @@ SparseEvaluation FountainThroughBayonsChain() {
   const std::string images = testing::DataPath("fountain-P11/images");
   const std::string dir = testing::TempDir("orientation_fountain_chain");
   const std::string db = dir + "/database.db";
-  Run({"import_ground_truth",
-       "--format",
-       "strecha",
-       "--input_path",
-       testing::DataPath("fountain-P11/gt_dense_cameras"),
-       "--output_path",
-       dir + "/truth",
-       "--image_path",
-       images});
-  const Scene truth = ReadModel(dir + "/truth");
+  const Scene truth = ImportStrechaTruth("fountain-P11", dir);
   MatchWithCalibratedCamera(
       images,
       db,
@@ -465,16 +471,7 @@ TEST(Orientation, HerzJesuWithNothingGiven) {
   const std::string dir =
       testing::TempDir("orientation_herz_jesu_uncalibrated");
   const std::string db = dir + "/database.db";
-  bayon::Run({"import_ground_truth",
-              "--format",
-              "strecha",
-              "--input_path",
-              testing::DataPath("herz-jesu-P8/gt_dense_cameras"),
-              "--output_path",
-              dir + "/truth",
-              "--image_path",
-              images});
-  const Scene truth = ReadModel(dir + "/truth");
+  const Scene truth = ImportStrechaTruth("herz-jesu-P8", dir);
   const double true_focal_px =
       truth.cameras.begin()->second.MeanFocalLengthPx();
   bayon::Run({"import",

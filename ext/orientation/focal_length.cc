@@ -135,6 +135,54 @@ class FocalScore {
   std::vector<bool> use_;
 };
 
+// The golden-section search for the minimum of score(exp(x)) in [a, b],
+// down to a width of `tolerance`.
+double GoldenSection(const FocalScore& score,
+                     double a,
+                     double b,
+                     double tolerance) {
+  const double golden = (std::sqrt(5.0) - 1) / 2;
+  double c = b - golden * (b - a), d = a + golden * (b - a);
+  double score_c = score(std::exp(c)).score;
+  double score_d = score(std::exp(d)).score;
+  while (b - a > tolerance) {
+    if (score_c < score_d) {
+      b = d;
+      d = c;
+      score_d = score_c;
+      c = b - golden * (b - a);
+      score_c = score(std::exp(c)).score;
+    } else {
+      a = c;
+      c = d;
+      score_c = score_d;
+      d = a + golden * (b - a);
+      score_d = score(std::exp(d)).score;
+    }
+  }
+  return (a + b) / 2;
+}
+
+// The relative standard deviation of the estimate exp(x) from the score's
+// curvature over +-h, h a few per cent: wide enough that the samples' noise
+// in the score does not dominate. The variance of unit weight comes from
+// the points within the threshold, the blunders being a constant of the
+// score.
+double RelativeSigma(const FocalScore& score,
+                     double x,
+                     const FocalScore::Value& at_x,
+                     int num_pairs) {
+  const double h = 0.03;
+  const double curvature = (score(std::exp(x + h)).score - 2 * at_x.score +
+                            score(std::exp(x - h)).score) /
+                           (h * h);
+  const int dof = at_x.num_inliers - 5 * num_pairs - 1;
+  if (dof <= 0 || !(curvature > 0)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return std::sqrt(2 * at_x.inlier_sum / dof / curvature);
+}
+
 }  // namespace
 
 FocalLengthEstimate EstimateFocalLength(
@@ -144,21 +192,15 @@ FocalLengthEstimate EstimateFocalLength(
   options.Check();
   CheckOption(long_side_px > 0, "long_side_px", "> 0", long_side_px);
   FocalLengthEstimate estimate;
-  for (const ConjugatePoints& points : pairs) {
-    if (points.size() < options.estimation.min_num_points) continue;
-    ++estimate.num_pairs;
-    estimate.num_points += points.size();
-  }
-  if (estimate.num_pairs == 0 ||
-      estimate.num_points <= 5 * estimate.num_pairs + 1) {
-    estimate.reason = "no image pair with enough conjugate points";
-    return estimate;
-  }
   std::vector<ConjugatePoints> usable;
   for (const ConjugatePoints& points : pairs) {
     if (points.size() >= options.estimation.min_num_points) {
       usable.push_back(points);
     }
+  }
+  if (usable.empty()) {
+    estimate.reason = "no image pair with enough conjugate points";
+    return estimate;
   }
   FocalScore score(usable, options);
 
@@ -182,8 +224,6 @@ FocalLengthEstimate EstimateFocalLength(
     }
   }
   score.Use(use);
-  estimate.num_pairs = 0;
-  estimate.num_points = 0;
   for (size_t k = 0; k < usable.size(); ++k) {
     if (!use[k]) continue;
     ++estimate.num_pairs;
@@ -216,46 +256,13 @@ FocalLengthEstimate EstimateFocalLength(
     return estimate;
   }
 
-  // Golden-section search between the best grid value's neighbours.
-  const double golden = (std::sqrt(5.0) - 1) / 2;
-  double a = xs[best - 1], b = xs[best + 1];
-  double c = b - golden * (b - a), d = a + golden * (b - a);
-  double score_c = score(std::exp(c)).score;
-  double score_d = score(std::exp(d)).score;
-  while (b - a > options.tolerance) {
-    if (score_c < score_d) {
-      b = d;
-      d = c;
-      score_d = score_c;
-      c = b - golden * (b - a);
-      score_c = score(std::exp(c)).score;
-    } else {
-      a = c;
-      c = d;
-      score_c = score_d;
-      d = a + golden * (b - a);
-      score_d = score(std::exp(d)).score;
-    }
-  }
-  const double x = (a + b) / 2;
+  const double x =
+      GoldenSection(score, xs[best - 1], xs[best + 1], options.tolerance);
   estimate.focal_length_px = std::exp(x);
   const FocalScore::Value at_estimate = score(estimate.focal_length_px);
   estimate.score = at_estimate.score;
-
-  // The curvature over +-h, h a few per cent: wide enough that the
-  // samples' noise in the score does not dominate. The variance of unit
-  // weight comes from the points within the threshold, the blunders being
-  // a constant of the score.
-  const double h = 0.03;
-  const double curvature = (score(std::exp(x + h)).score - 2 * estimate.score +
-                            score(std::exp(x - h)).score) /
-                           (h * h);
-  const int dof = at_estimate.num_inliers - 5 * estimate.num_pairs - 1;
-  const double s2 = dof > 0 ? at_estimate.inlier_sum / dof
-                            : std::numeric_limits<double>::infinity();
-  estimate.relative_sigma = curvature > 0
-                                ? std::sqrt(2 * s2 / curvature)
-                                : std::numeric_limits<double>::infinity();
+  estimate.relative_sigma =
+      RelativeSigma(score, x, at_estimate, estimate.num_pairs);
   if (!(estimate.relative_sigma <= options.max_relative_sigma)) {
     estimate.reason = StrCat("the photographs do not fix the focal length ",
                              "(relative standard deviation ",

@@ -31,6 +31,7 @@ if [ ! -f "$baseline/temple/evaluation.json" ] ||
 fi
 
 source "$(dirname "$0")/lib/timing.sh"
+source "$(dirname "$0")/lib/bayon_chain.sh"
 
 # chain NAME IMAGES FORMAT TRUTH_INPUT MATCH_ARGS...
 chain() {
@@ -49,16 +50,7 @@ chain() {
     awk '{ print $5 "," $6 "," $7 "," $8 }')
   timed "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
     --single_camera 1 --camera_model PINHOLE --camera_params "$params"
-  timed "$ws/features" "$BAYON" features --database_path "$db" \
-    --image_path "$images" --num_threads "$threads"
-  timed "$ws/match" "$BAYON" match --database_path "$db" --image_path "$images" \
-    --num_threads "$threads" "$@"
-  timed "$ws/relative" "$BAYON" relative --database_path "$db" \
-    --num_threads "$threads"
-  timed "$ws/disparity" "$BAYON" disparity --database_path "$db" \
-    --num_threads "$threads"
-  timed "$ws/tiepoints" "$BAYON" tiepoints --database_path "$db" \
-    --image_path "$images" --num_threads "$threads"
+  bayon_tie_points "$ws" "$db" "$images" "$@"
   timed "$ws/strip" "$BAYON" strip --database_path "$db" \
     --output_path "$ws/initial" --num_threads "$threads"
   timed "$ws/adjust" "$BAYON" adjust --database_path "$db" \

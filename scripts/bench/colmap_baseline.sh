@@ -18,21 +18,7 @@ threads="${BAYON_THREADS:-2}"
 mkdir -p "$dir"
 
 source "$(dirname "$0")/lib/timing.sh"
-# The mapper's model with the most registered images (images.bin starts
-# with their number).
-largest_model() {
-  local best="" best_n=-1 n model
-  for model in "$1"/*/; do
-    [ -f "$model/images.bin" ] || continue
-    n=$(od -An -t u8 -N 8 "$model/images.bin" | tr -d ' ')
-    if [ "$n" -gt "$best_n" ]; then
-      best="${model%/}"
-      best_n="$n"
-    fi
-  done
-  echo "$best"
-}
-
+source "$(dirname "$0")/lib/colmap.sh"
 # baseline NAME IMAGES MAX_IMAGE_SIZE FORMAT TRUTH_INPUT
 baseline() {
   local name="$1" images="$2" max_size="$3" format="$4" truth_input="$5"

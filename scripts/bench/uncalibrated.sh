@@ -17,7 +17,7 @@
 # fountain-P11 (11 x 3072x2048; bayon 3 successors per image, COLMAP
 # exhaustive, SIFT at 2000 px), herz-jesu-P8 (8 x 3072x2048, exhaustive).
 #   scripts/bench.sh uncalibrated [MODE...]   (default: calibrated nothing focal5)
-# About 30 min on 2 cores. Outputs under $BAYON_BUILD/bench/uncalibrated;
+# About 20 min on 2 cores. Outputs under $BAYON_BUILD/bench/uncalibrated;
 # nothing is written into the data folder. BAYON_THREADS (default 2).
 set -euo pipefail
 dir="$BAYON_BUILD/bench/uncalibrated"
@@ -27,20 +27,8 @@ modes=("$@")
 [ ${#modes[@]} -gt 0 ] || modes=(calibrated nothing focal5)
 mkdir -p "$dir"
 source "$(dirname "$0")/lib/timing.sh"
-
-# The mapper's model with the most registered images.
-largest_model() {
-  local best="" best_n=-1 n model
-  for model in "$1"/*/; do
-    [ -f "$model/images.bin" ] || continue
-    n=$(od -An -t u8 -N 8 "$model/images.bin" | tr -d ' ')
-    if [ "$n" -gt "$best_n" ]; then
-      best="${model%/}"
-      best_n="$n"
-    fi
-  done
-  echo "$best"
-}
+source "$(dirname "$0")/lib/bayon_chain.sh"
+source "$(dirname "$0")/lib/colmap.sh"
 
 # The truth's camera: "fx fy cx cy width height".
 truth_camera() {
@@ -67,16 +55,7 @@ bayon_run() {
   esac
   timed "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
     --single_camera 1 "${import_args[@]}"
-  timed "$ws/features" "$BAYON" features --database_path "$db" \
-    --image_path "$images" --num_threads "$threads"
-  timed "$ws/match" "$BAYON" match --database_path "$db" --image_path "$images" \
-    --num_threads "$threads" "$@"
-  timed "$ws/relative" "$BAYON" relative --database_path "$db" \
-    --num_threads "$threads"
-  timed "$ws/disparity" "$BAYON" disparity --database_path "$db" \
-    --num_threads "$threads"
-  timed "$ws/tiepoints" "$BAYON" tiepoints --database_path "$db" \
-    --image_path "$images" --num_threads "$threads"
+  bayon_tie_points "$ws" "$db" "$images" "$@"
   timed "$ws/strip" "$BAYON" strip --database_path "$db" \
     --output_path "$ws/initial" --num_threads "$threads" || return 0
   timed "$ws/adjust" "$BAYON" adjust --database_path "$db" \
@@ -151,12 +130,12 @@ one() {
   done
 }
 
-one temple "$data/temple-ring" 3200 middlebury \
-  "$data/temple-ring/templeSR_par.txt" --pairing exhaustive
-one fountain "$data/fountain-P11/images" 2000 strecha \
-  "$data/fountain-P11/gt_dense_cameras" --pairing sequential --num_neighbors 3
-one herz-jesu "$data/herz-jesu-P8/images" 2000 strecha \
-  "$data/herz-jesu-P8/gt_dense_cameras" --pairing exhaustive
+one temple "$data/temple-ring" middlebury \
+  "$data/temple-ring/templeSR_par.txt" 3200 --pairing exhaustive
+one fountain "$data/fountain-P11/images" strecha \
+  "$data/fountain-P11/gt_dense_cameras" 2000 --pairing sequential --num_neighbors 3
+one herz-jesu "$data/herz-jesu-P8/images" strecha \
+  "$data/herz-jesu-P8/gt_dense_cameras" 2000 --pairing exhaustive
 
 python3 - "$dir" "${modes[@]}" <<'EOF'
 import json, os, sys
