@@ -60,6 +60,14 @@ int RunStripCommand(int argc, char** argv) {
                  options.max_gap,
                  "Bridge a missing model with an image up to this many places "
                  "back");
+  app.add_option("--max_loop_error_deg",
+                 options.view_graph.max_loop_error_deg,
+                 "A pair most of whose triangles of relative rotations fail "
+                 "to close within this is left out, deg");
+  app.add_option("--max_loop_error_sigmas",
+                 options.view_graph.max_loop_error_sigmas,
+                 "... and within this many of the triangle's standard "
+                 "deviations");
   app.add_option("--min_common_points",
                  options.min_common_points,
                  "Tie points two models must share for the scale transfer");
@@ -128,6 +136,9 @@ int RunStripCommand(int argc, char** argv) {
       " images oriented (",
       result.unoriented_images.size(),
       " not), ",
+      result.dropped_pairs.empty() ? std::string()
+                                   : StrCat(result.dropped_pairs.size(),
+                                            " pairs dropped for their loops, "),
       connected,
       " models, ",
       result.model.points3D.size(),

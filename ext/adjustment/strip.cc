@@ -9,6 +9,7 @@
 #include "ext/adjustment/triangulation.h"
 #include "ext/colmap/bayon_tables.h"
 #include "ext/colmap/database.h"
+#include "ext/colmap/table_relative.h"
 #include "ext/colmap/table_tie_points.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
@@ -89,6 +90,7 @@ class StripBuilder {
     Timer timer;
     const ControlData control = ReadControlFolder(control_path_);
     LoadImagesAndCameras();
+    DropInconsistentPairs();
     BuildTracks();
     ChainModels();
     CloseRing();
@@ -177,6 +179,15 @@ class StripBuilder {
       if (!image_idxs_.count(id1) || !image_idxs_.count(id2)) continue;
       geometries_[{image_idxs_.at(id1), image_idxs_.at(id2)}] = geometry;
     }
+    if (BayonTableExists(&database, kRelativeOrientationTable.name)) {
+      for (const auto& [pair_id, record] :
+           ReadAllRelativeOrientations(&database)) {
+        const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+        if (!image_idxs_.count(id1) || !image_idxs_.count(id2)) continue;
+        rotation_sigma_deg_[{image_idxs_.at(id1), image_idxs_.at(id2)}] =
+            record.std_omega_phi_kappa_deg.norm();
+      }
+    }
     if (geometries_.empty()) {
       ThrowInputError(database_path_,
                       ": no verified image pairs (two_view_geometries); run "
@@ -186,6 +197,53 @@ class StripBuilder {
         ReadTiePointsFor(&database, options_.tie_points);
     use_matches_ = options_.tie_points != TiePointSource::kAlsm;
     AppendTieObservations(tie_points);
+  }
+
+  // ----------------------------------------------------------- view graph
+  // The pairs whose rotation disagrees with their loops (view_graph.h) go
+  // before their matches join any track, each rotation with its standard
+  // deviation from bayon_relative_orientation where `bayon relative` wrote
+  // one. Pairs given by an essential matrix alone are decomposed later,
+  // with the tracks, and are not tested.
+  void DropInconsistentPairs() {
+    std::vector<ViewGraphPair> pairs;
+    std::vector<std::pair<int, int>> keys;
+    for (const auto& [key, geometry] : geometries_) {
+      if (!geometry.qvec || geometry.qvec->norm() < 0.5) continue;
+      const Eigen::Vector4d& q = *geometry.qvec;
+      ViewGraphPair pair;
+      pair.image1 = key.first;
+      pair.image2 = key.second;
+      pair.rotation = Eigen::Quaterniond(q(0), q(1), q(2), q(3))
+                          .normalized()
+                          .toRotationMatrix();
+      const auto sigma = rotation_sigma_deg_.find(key);
+      if (sigma != rotation_sigma_deg_.end()) pair.sigma_deg = sigma->second;
+      pairs.push_back(pair);
+      keys.push_back(key);
+    }
+    for (const DroppedPair& dropped :
+         FindInconsistentPairs(pairs, options_.view_graph)) {
+      const auto [a, b] = keys[dropped.pair_idx];
+      const std::string line =
+          StrCat(images_[a].row.name,
+                 " - ",
+                 images_[b].row.name,
+                 ": its rotation disagrees with the loops it lies on (",
+                 dropped.num_failing,
+                 " of ",
+                 dropped.num_triangles,
+                 " triangles fail, median loop error ",
+                 dropped.median_loop_error_deg,
+                 " deg, above ",
+                 options_.view_graph.max_loop_error_deg,
+                 " deg and ",
+                 options_.view_graph.max_loop_error_sigmas,
+                 " standard deviations)");
+      LOG(WARNING) << "pair dropped: " << line;
+      result_.dropped_pairs.push_back(line);
+      geometries_.erase(keys[dropped.pair_idx]);
+    }
   }
 
   // The tie observations after each image's keypoints, and their tracks.
@@ -1025,6 +1083,8 @@ class StripBuilder {
   std::vector<StripImage> images_;      // in sequence order
   std::map<image_t, int> image_idxs_;
   std::map<std::pair<int, int>, TwoViewGeometry> geometries_;
+  // The relative rotations' standard deviations (bayon relative), degrees.
+  std::map<std::pair<int, int>, double> rotation_sigma_deg_;
   std::vector<std::vector<std::pair<int, int>>> tracks_;
   std::vector<std::vector<std::pair<int, int>>> tie_tracks_;  // bayon's
   bool use_matches_ = true;  // tracks of the verified matches as well
@@ -1039,6 +1099,7 @@ class StripBuilder {
 }  // namespace
 
 void StripOptions::Check() const {
+  view_graph.Check();
   CheckOption(max_gap >= 1, "StripOptions.max_gap", ">= 1", max_gap);
   CheckOption(min_common_points >= 1,
               "StripOptions.min_common_points",
@@ -1095,6 +1156,7 @@ std::string StripReportJson(const StripResult& result) {
   }
   root["resected_images"] = resected;
   root["unoriented_images"] = result.unoriented_images;
+  root["dropped_pairs"] = result.dropped_pairs;
   Json models = Json::array();
   for (const StripModel& m : result.models) {
     Json model = {{"images", {m.image1, m.image2}},

@@ -6,6 +6,9 @@
 // or the essential matrix decomposed with the cheirality test) are chained
 // into a strip in model coordinates:
 //
+//  0. the view graph: a pair whose relative rotation disagrees with the
+//     loops it lies on (a chance orientation between photographs that do
+//     not overlap) is left out, with the reason (view_graph.h);
 //  1. model connection: the first model fixes the strip system (its left
 //     camera, base length 1); each next model is attached to the previous
 //     one at their common image, its scale transferred through the tie
@@ -40,6 +43,7 @@
 
 #include "ext/adjustment/adjustment_input.h"
 #include "ext/adjustment/datum.h"
+#include "ext/adjustment/view_graph.h"
 #include "ext/core/scene.h"
 
 #include <string>
@@ -86,6 +90,9 @@ struct StripOptions {
   // points, the minimum datum with a vertical bar, otherwise an error when
   // control is given (kFree keeps model coordinates).
   DatumOptions datum;
+  // Pairs whose relative rotation disagrees with the loops it lies on
+  // (view_graph.h) are left out before anything is chained.
+  ViewGraphOptions view_graph;
   int num_threads = -1;
   void Check() const;
 };
@@ -114,6 +121,8 @@ struct StripResult {
   };
   std::vector<ResectedImage> resected_images;
   std::vector<std::string> unoriented_images;
+  // Pairs left out for their loops: "A - B: why".
+  std::vector<std::string> dropped_pairs;
   int num_alsm_tie_points = 0;  // bayon tie points among the tracks
   std::string order;            // "name" or "graph"
   int num_tracks = 0;

@@ -120,6 +120,50 @@ TEST(Strip, ClosedRingWithControlIsCloseToTheTruth) {
   result.model.CheckConsistency("strip");
 }
 
+// A false relative orientation (chance matches between photographs that do
+// not overlap would give one) is left out for its loops, and the strip is
+// as good as without it.
+TEST(Strip, APairThatDisagreesWithItsLoopsIsDropped) {
+  const Workspace ws = MakeWorkspace("strip_loops");
+  const std::string db = ws.path + "/database.db";
+  DisturbRelativeOrientations(db, 0.3, false);
+  std::string name1, name2;
+  int num_pairs = 0;
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    std::map<image_t, std::string> names;
+    for (const DatabaseImage& image : database.ReadAllImages()) {
+      names[image.image_id] = image.name;
+    }
+    // Images 5 and 6 (neighbours on the ring): turned by 60 deg.
+    TwoViewGeometry geometry = database.ReadTwoViewGeometry(5, 6);
+    ASSERT_TRUE(geometry.qvec.has_value());
+    const Eigen::Vector4d& q = *geometry.qvec;
+    const Eigen::Quaterniond turned =
+        Eigen::Quaterniond(
+            Eigen::AngleAxisd(M_PI / 3, Eigen::Vector3d::UnitY())) *
+        Eigen::Quaterniond(q(0), q(1), q(2), q(3));
+    geometry.qvec =
+        Eigen::Vector4d(turned.w(), turned.x(), turned.y(), turned.z());
+    database.WriteTwoViewGeometry(5, 6, geometry);
+    name1 = names.at(5);
+    name2 = names.at(6);
+    num_pairs = static_cast<int>(database.ReadAllTwoViewGeometries().size());
+  }
+  StripOptions options;
+  options.num_threads = 1;
+  const StripResult result = RunStrip(db, ws.path + "/control", options);
+  ASSERT_EQ(result.dropped_pairs.size(), 1u) << num_pairs << " pairs";
+  EXPECT_EQ(result.dropped_pairs[0].rfind(name1 + " - " + name2 + ": ", 0), 0u)
+      << result.dropped_pairs[0];
+  SparseEvaluationOptions evaluation_options;
+  evaluation_options.align = false;
+  const SparseEvaluation evaluation =
+      EvaluateSparse(result.model, ws.truth.scene, evaluation_options);
+  EXPECT_EQ(evaluation.num_registered, 16);
+  EXPECT_LT(evaluation.rotation_rms_deg, 0.1);
+}
+
 TEST(Strip, OpenStripFromEssentialMatricesInModelCoordinates) {
   const Workspace ws = MakeWorkspace("strip_open");
   DisturbRelativeOrientations(ws.path + "/database.db", 0.0, true);
