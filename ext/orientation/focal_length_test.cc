@@ -85,13 +85,23 @@ std::vector<ConjugatePoints> RingPairs(double focal_px,
   return pairs;
 }
 
+// The synthetic pairs have few blunders: a quarter of the samples and a few
+// candidates per orientation find them (the search itself is the same), so
+// that the tests stay quick under the sanitizers.
+FocalLengthOptions Options() {
+  FocalLengthOptions options;
+  options.estimation.num_samples = 256;
+  options.estimation.num_candidates = 4;
+  return options;
+}
+
 TEST(FocalLength, FoundFromARingWhoseAxesNearlyMeet) {
   const double truth = 1750;
   // COLMAP's guess, 1.2 x the long side.
   const std::vector<ConjugatePoints> pairs =
       RingPairs(truth, 1.2 * kWidth, 8, 25, 0.3, 0.1, 7);
   const FocalLengthEstimate estimate =
-      EstimateFocalLength(pairs, kWidth, FocalLengthOptions());
+      EstimateFocalLength(pairs, kWidth, Options());
   ASSERT_TRUE(estimate.success) << estimate.reason;
   EXPECT_EQ(estimate.num_pairs, 7);
   const double error = estimate.focal_length_px / truth - 1;
@@ -117,7 +127,7 @@ TEST(FocalLength, AWideAngleAndATelephotoLensAlike) {
     const std::vector<ConjugatePoints> pairs =
         RingPairs(truth, 1.2 * kWidth, 6, 20, 0.3, 0.05, 11);
     const FocalLengthEstimate estimate =
-        EstimateFocalLength(pairs, kWidth, FocalLengthOptions());
+        EstimateFocalLength(pairs, kWidth, Options());
     ASSERT_TRUE(estimate.success) << truth << ": " << estimate.reason;
     const double error = estimate.focal_length_px / truth - 1;
     EXPECT_LT(std::abs(error), 3 * estimate.relative_sigma) << truth;
@@ -126,10 +136,8 @@ TEST(FocalLength, AWideAngleAndATelephotoLensAlike) {
 }
 
 TEST(FocalLength, ATurntableDoesNotFixIt) {
-  const FocalLengthEstimate estimate =
-      EstimateFocalLength(RingPairs(1750, 2160, 8, 25, 0.3, 0.05, 5, 0),
-                          kWidth,
-                          FocalLengthOptions());
+  const FocalLengthEstimate estimate = EstimateFocalLength(
+      RingPairs(1750, 2160, 8, 25, 0.3, 0.05, 5, 0), kWidth, Options());
   EXPECT_FALSE(estimate.success);
   EXPECT_NE(estimate.reason.find("do not fix the focal length"),
             std::string::npos)
@@ -137,12 +145,11 @@ TEST(FocalLength, ATurntableDoesNotFixIt) {
 }
 
 TEST(FocalLength, SaysWhatIsMissing) {
-  const FocalLengthEstimate none =
-      EstimateFocalLength({}, kWidth, FocalLengthOptions());
+  const FocalLengthEstimate none = EstimateFocalLength({}, kWidth, Options());
   EXPECT_FALSE(none.success);
   EXPECT_NE(none.reason.find("no image pair"), std::string::npos);
   // A lens shorter than the range searched.
-  FocalLengthOptions narrow;
+  FocalLengthOptions narrow = Options();
   narrow.min_focal_ratio = 1.2;
   const FocalLengthEstimate outside = EstimateFocalLength(
       RingPairs(1750, 2160, 6, 20, 0.3, 0, 3), kWidth, narrow);
