@@ -558,6 +558,15 @@ class AdjustBadInput : public ::testing::Test {
   std::string dir_;
 };
 
+TEST_F(AdjustBadInput, DeterminabilityLimitsOutOfRange) {
+  ExpectRefused("",
+                {"--max_exterior_correlation", "1.5"},
+                "AdjustmentOptions.max_exterior_correlation");
+  ExpectRefused("",
+                {"--max_interior_sigma", "0"},
+                "AdjustmentOptions.max_interior_sigma");
+}
+
 TEST_F(AdjustBadInput, NoControlWhereTheDatumNeedsIt) {
   ExpectRefused("", {"--datum", "control"}, "no control points");
   ExpectRefused("", {"--datum", "minimum"}, "vertical levelling bar");

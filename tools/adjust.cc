@@ -103,6 +103,12 @@ int RunAdjust(int argc, char** argv) {
   app.add_option("--max_correlation",
                  options.max_correlation,
                  "Correlations above this are flagged");
+  app.add_option("--max_exterior_correlation",
+                 options.max_exterior_correlation,
+                 "Self-calibration (significant): a parameter correlated "
+                 "above this with an exterior orientation is not "
+                 "determinable and removed (the interior orientation only "
+                 "when also imprecise, --max_interior_sigma)");
   app.add_option("--max_interior_sigma",
                  options.max_interior_sigma,
                  "Self-calibration (significant): the interior orientation "

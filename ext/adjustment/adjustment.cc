@@ -631,6 +631,10 @@ void AdjustmentOptions::Check() const {
               "AdjustmentOptions.max_correlation",
               "in (0, 1]",
               max_correlation);
+  CheckOption(max_exterior_correlation > 0 && max_exterior_correlation <= 1,
+              "AdjustmentOptions.max_exterior_correlation",
+              "in (0, 1]",
+              max_exterior_correlation);
   CheckOption(max_interior_sigma > 0,
               "AdjustmentOptions.max_interior_sigma",
               "> 0",
