@@ -19,6 +19,7 @@
 #include "ext/colmap/calibration_json.h"
 #include "ext/colmap/colmap_cli.h"
 #include "ext/colmap/model_io.h"
+#include "ext/core/camera.h"
 #include "ext/core/camera_models.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
@@ -93,22 +94,10 @@ struct CompareColmapOptions {
                       ")");
     }
     if (!camera_params.empty()) {
-      const int given = static_cast<int>(
-          std::count(camera_params.begin(), camera_params.end(), ',') + 1);
-      const int wanted = CameraModelInfoFor(*model).num_params;
-      if (given != wanted) {
-        ThrowInputError("--camera_params: ",
-                        camera_model,
-                        " has ",
-                        wanted,
-                        " parameters (",
-                        CameraModelInfoFor(*model).params_info,
-                        "), got ",
-                        given,
-                        " ('",
-                        camera_params,
-                        "')");
-      }
+      CheckNumCameraParams(
+          *model,
+          std::count(camera_params.begin(), camera_params.end(), ',') + 1,
+          "--camera_params");
     }
   }
   bool calibrated() const { return !camera_params.empty(); }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/colmap/bayon_tables.h"
 #include "ext/colmap/database.h"
+#include "ext/core/camera.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
@@ -68,19 +69,7 @@ struct ImportOptions {
             "--camera_params and --focal_length_mm both give the focal "
             "length; give one");
       }
-      const size_t expected =
-          static_cast<size_t>(CameraModelInfoFor(*model).num_params);
-      if (camera_params.size() != expected) {
-        ThrowInputError("--camera_params: ",
-                        camera_params.size(),
-                        " values, but ",
-                        camera_model,
-                        " has ",
-                        expected,
-                        " parameters (",
-                        CameraModelInfoFor(*model).params_info,
-                        ")");
-      }
+      CheckNumCameraParams(*model, camera_params.size(), "--camera_params");
     }
     CheckOption(default_focal_length_factor > 0,
                 "--default_focal_length_factor",

@@ -15,6 +15,7 @@
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
 #include "ext/core/statistics.h"
+#include "ext/core/union_find.h"
 
 #include <Eigen/Dense>
 #include <glog/logging.h>
@@ -47,25 +48,6 @@ struct StripImage {
 };
 
 // Union-find over (image, keypoint) for the tracks of the verified matches.
-class DisjointSets {
- public:
-  int Add() {
-    parent_.push_back(static_cast<int>(parent_.size()));
-    return parent_.back();
-  }
-  int Find(int x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void Union(int a, int b) { parent_[Find(a)] = Find(b); }
-
- private:
-  std::vector<int> parent_;
-};
-
 Eigen::Quaterniond ExpRotation(const Eigen::Vector3d& omega) {
   const double angle = omega.norm();
   if (angle < 1e-15) return Eigen::Quaterniond::Identity();
@@ -203,20 +185,18 @@ class StripBuilder {
   // The pairs whose rotation disagrees with their loops (view_graph.h) go
   // before their matches join any track, each rotation with its standard
   // deviation from bayon_relative_orientation where `bayon relative` wrote
-  // one. Pairs given by an essential matrix alone are decomposed later,
-  // with the tracks, and are not tested.
+  // one. Pairs without a stored pose (E alone) are decomposed later, with
+  // the tracks, and are not tested.
   void DropInconsistentPairs() {
     std::vector<ViewGraphPair> pairs;
     std::vector<std::pair<int, int>> keys;
     for (const auto& [key, geometry] : geometries_) {
-      if (!geometry.qvec || geometry.qvec->norm() < 0.5) continue;
-      const Eigen::Vector4d& q = *geometry.qvec;
+      const std::optional<Rigid3d> pose = geometry.StoredPose();
+      if (!pose) continue;
       ViewGraphPair pair;
       pair.image1 = key.first;
       pair.image2 = key.second;
-      pair.rotation = Eigen::Quaterniond(q(0), q(1), q(2), q(3))
-                          .normalized()
-                          .toRotationMatrix();
+      pair.rotation = pose->rotation.toRotationMatrix();
       const auto sigma = rotation_sigma_deg_.find(key);
       if (sigma != rotation_sigma_deg_.end()) pair.sigma_deg = sigma->second;
       pairs.push_back(pair);
@@ -303,14 +283,14 @@ class StripBuilder {
   }
 
   void BuildTracks() {
-    DisjointSets sets;
+    UnionFind sets;
     std::unordered_map<int64_t, int> element_of;
     std::vector<std::pair<int, int>> elements;
     auto element = [&](int image_idx, int keypoint) {
       const int64_t key = Key(image_idx, keypoint);
       auto it = element_of.find(key);
       if (it != element_of.end()) return it->second;
-      const int id = sets.Add();
+      const int id = static_cast<int>(sets.Add());
       element_of.emplace(key, id);
       elements.push_back({image_idx, keypoint});
       return id;
@@ -325,7 +305,7 @@ class StripBuilder {
     }
     std::unordered_map<int, int> track_of_root;
     for (size_t e = 0; e < elements.size(); ++e) {
-      const int root = sets.Find(static_cast<int>(e));
+      const int root = static_cast<int>(sets.Find(e));
       auto it = track_of_root.find(root);
       if (it == track_of_root.end()) {
         it =
@@ -366,12 +346,7 @@ class StripBuilder {
                                              int b,
                                              const TwoViewGeometry& geometry,
                                              std::string* reason) {
-    if (geometry.qvec && geometry.tvec && geometry.tvec->norm() > 1e-12 &&
-        geometry.qvec->norm() > 0.5) {
-      const Eigen::Vector4d& q = *geometry.qvec;
-      return Rigid3d(Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized(),
-                     geometry.tvec->normalized());
-    }
+    if (std::optional<Rigid3d> pose = geometry.StoredPose()) return pose;
     Eigen::Matrix3d E;
     if (geometry.E && geometry.E->norm() > 1e-12) {
       E = *geometry.E;

@@ -12,6 +12,15 @@
 #include <filesystem>
 
 namespace bayon {
+
+std::optional<Rigid3d> TwoViewGeometry::StoredPose() const {
+  if (!qvec || !tvec || tvec->norm() <= 1e-12 || qvec->norm() <= 0.5) {
+    return std::nullopt;
+  }
+  const Eigen::Vector4d& q = *qvec;
+  return Rigid3d(Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized(),
+                 tvec->normalized());
+}
 namespace {
 
 // The DDL of COLMAP 3.8 (src/base/database.cc), character for character, so

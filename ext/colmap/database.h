@@ -16,6 +16,7 @@
 
 #include "ext/colmap/sqlite.h"
 #include "ext/core/camera.h"
+#include "ext/core/rigid3.h"
 #include "ext/core/types.h"
 
 #include <Eigen/Core>
@@ -82,6 +83,10 @@ struct TwoViewGeometry {
   std::optional<Eigen::Matrix3d> H;  // maps image 1 to image 2
   std::optional<Eigen::Vector4d> qvec;  // cam2_from_cam1 rotation (w, x, y, z)
   std::optional<Eigen::Vector3d> tvec;  // cam2_from_cam1 translation, |t| = 1
+
+  // cam2_from_cam1 (|t| = 1) as qvec and tvec store it, or nullopt where
+  // they are missing or zero (a geometry of E, F or H alone).
+  std::optional<Rigid3d> StoredPose() const;
 };
 
 // What the schema of an opened database looks like.

@@ -345,4 +345,22 @@ std::string Camera::ParamsToString() const {
   return stream.str();
 }
 
+void CheckNumCameraParams(CameraModelId model,
+                          size_t num_values,
+                          const std::string& flag) {
+  const CameraModelInfo& info = CameraModelInfoFor(model);
+  if (num_values != static_cast<size_t>(info.num_params)) {
+    ThrowInputError(flag,
+                    ": ",
+                    num_values,
+                    " values, but ",
+                    info.name,
+                    " has ",
+                    info.num_params,
+                    " parameters (",
+                    info.params_info,
+                    ")");
+  }
+}
+
 }  // namespace bayon

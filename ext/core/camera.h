@@ -81,4 +81,10 @@ struct Camera {
   std::string ParamsToString() const;
 };
 
+// Throws InputError, naming `flag`, unless `num_values` parameters fit
+// `model` (COLMAP's order, as --ImageReader.camera_params takes them).
+void CheckNumCameraParams(CameraModelId model,
+                          size_t num_values,
+                          const std::string& flag);
+
 }  // namespace bayon

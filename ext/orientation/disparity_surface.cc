@@ -1316,12 +1316,9 @@ std::optional<PairOrientation> ReadPairOrientation(Database* database,
     const TwoViewGeometry geometry = database->ReadTwoViewGeometry(lo, hi);
     const bool posed = geometry.config == TwoViewConfig::kCalibrated ||
                        geometry.config == TwoViewConfig::kUncalibrated;
-    if (posed && geometry.qvec && geometry.tvec &&
-        geometry.tvec->norm() > 1e-12) {
-      const Eigen::Vector4d& q = *geometry.qvec;
-      orientation.cam2_from_cam1 =
-          Rigid3d(Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized(),
-                  geometry.tvec->normalized());
+    const std::optional<Rigid3d> pose = geometry.StoredPose();
+    if (posed && pose) {
+      orientation.cam2_from_cam1 = *pose;
       found = true;
     }
   }

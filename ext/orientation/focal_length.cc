@@ -11,10 +11,10 @@
 namespace bayon {
 
 FocalLengthOptions::FocalLengthOptions() {
-  // Each hypothesis orients every pair again: a quarter of the samples and
-  // a few candidates are enough once the blunders are few, and the final
-  // orientation (at the estimate) uses the full settings. No pair is
-  // refused for its sigma: a wrong hypothesis must score badly, not vanish.
+  // Each hypothesis orients every pair with the full settings (fewer
+  // samples let temple-ring's narrow pairs settle on false minima). No pair
+  // is refused for its sigma: a wrong hypothesis must score badly, not
+  // vanish.
   estimation.max_sigma_px = std::numeric_limits<double>::max();
 }
 

@@ -200,16 +200,12 @@ void LogPair(const PairOrientationReport& report) {
 // to the cameras table and renews those images' vectors.
 std::vector<FocalLengthReport> EstimateUnknownFocalLengths(
     Database* database,
-    const std::vector<DatabaseImage>& images,
+    const std::map<image_t, camera_t>& camera_of_image,
     const std::vector<PairJob>& jobs,
     const std::map<image_t, FeatureKeypoints>& keypoints,
     const RelativeOptions& options,
     std::map<camera_t, Camera>* cameras,
     std::map<image_t, ImageVectors>* vectors) {
-  std::map<image_t, camera_t> camera_of_image;
-  for (const DatabaseImage& image : images) {
-    camera_of_image[image.image_id] = image.camera_id;
-  }
   // Each uncalibrated camera's pairs to orient, strongest first.
   std::map<camera_t, std::vector<const PairJob*>> pairs_of_camera;
   for (const PairJob& job : jobs) {
@@ -266,10 +262,12 @@ std::vector<FocalLengthReport> EstimateUnknownFocalLengths(
       }
       camera.has_prior_focal_length = true;
       database->UpdateCamera(camera);
-      for (const DatabaseImage& image : images) {
-        if (image.camera_id != camera_id) continue;
-        vectors->at(image.image_id) = ImageVectors::FromDatabase(
-            database, image, options.assume_zero_distortion);
+      // What ImageVectors::FromDatabase now reads for these images: the
+      // COLMAP camera (there is no calibration row), its focal length known.
+      const ImageVectors renewed(
+          camera, std::nullopt, true, options.assume_zero_distortion);
+      for (const auto& [image_id, image_camera] : camera_of_image) {
+        if (image_camera == camera_id) vectors->at(image_id) = renewed;
       }
       LOG(INFO) << std::fixed << std::setprecision(1) << "Camera " << camera_id
                 << ": focal length " << report.estimate.focal_length_px
@@ -365,8 +363,13 @@ RelativeSummary OrientImagePairs(const std::string& database_path,
 
   RelativeSummary summary;
   if (options.estimate_focal_length) {
-    summary.focal_lengths = EstimateUnknownFocalLengths(
-        &database, images, jobs, keypoints, options, &colmap_cameras, &vectors);
+    summary.focal_lengths = EstimateUnknownFocalLengths(&database,
+                                                        camera_of_image,
+                                                        jobs,
+                                                        keypoints,
+                                                        options,
+                                                        &colmap_cameras,
+                                                        &vectors);
   }
 
   std::vector<int> todo;
