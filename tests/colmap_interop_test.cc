@@ -11,7 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
+#include <set>
 
 #include "tests/temple_fixture.h"
 #include "tests/testing.h"
@@ -328,6 +330,91 @@ TEST(ColmapInterop, DatabaseCleanerKeepsBayonTablesConsistent) {
     ASSERT_TRUE(integrity.Step());
     EXPECT_EQ(integrity.ColumnText(0), "ok") << type;
   }
+}
+
+}  // namespace
+}  // namespace bayon
+
+namespace bayon {
+namespace {
+
+// `bayon features --detector sift` writes keypoints and descriptors that
+// stock COLMAP's matcher reads as its own, and `bayon match` matches them
+// as COLMAP does (ratio test 0.8, angle 0.7, mutual best in both
+// directions): the same matches, pair by pair, up to rounding.
+TEST(ColmapInterop, StockMatcherAndBayonMatchBayonSiftAlike) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string dir = testing::TempDir("interop_sift");
+  const std::string images = testing::DataPath("temple-ring");
+  const std::string db = dir + "/bayon.db";
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{
+           {"import", "--image_path", images, "--database_path", db},
+           {"features",
+            "--database_path",
+            db,
+            "--image_path",
+            images,
+            "--detector",
+            "sift"}}) {
+    const testing::CommandResult result = testing::RunBayon(args);
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+  }
+  testing::CopyTree(db, dir + "/colmap.db");
+  const testing::CommandResult colmap =
+      testing::RunColmap({"exhaustive_matcher",
+                          "--database_path",
+                          dir + "/colmap.db",
+                          "--SiftMatching.use_gpu",
+                          "0",
+                          "--SiftMatching.num_threads",
+                          "2"});
+  ASSERT_EQ(colmap.exit_code, 0) << colmap.output;
+  const testing::CommandResult bayon = testing::RunBayon({"match",
+                                                          "--database_path",
+                                                          db,
+                                                          "--image_path",
+                                                          images,
+                                                          "--pairing",
+                                                          "exhaustive",
+                                                          "--min_num_matches",
+                                                          "8"});
+  ASSERT_EQ(bayon.exit_code, 0) << bayon.output;
+
+  Database theirs(dir + "/colmap.db", Database::Mode::kReadOnly);
+  Database ours(db, Database::Mode::kReadOnly);
+  const std::vector<DatabaseImage> all = ours.ReadAllImages();
+  int64_t num_theirs = 0, num_ours = 0, num_common = 0;
+  for (size_t a = 0; a < all.size(); ++a) {
+    for (size_t b = a + 1; b < all.size(); ++b) {
+      const image_t id1 = all[a].image_id, id2 = all[b].image_id;
+      std::set<std::pair<uint32_t, uint32_t>> their_matches;
+      if (theirs.ExistsMatches(id1, id2)) {
+        const FeatureMatches m = theirs.ReadMatches(id1, id2);
+        for (int r = 0; r < m.rows(); ++r)
+          their_matches.insert({m(r, 0), m(r, 1)});
+      }
+      // bayon writes pairs with 8 matches or more; COLMAP writes all.
+      if (their_matches.size() < 8) continue;
+      num_theirs += their_matches.size();
+      if (!ours.ExistsMatches(id1, id2)) continue;
+      const FeatureMatches m = ours.ReadMatches(id1, id2);
+      num_ours += m.rows();
+      for (int r = 0; r < m.rows(); ++r) {
+        num_common += their_matches.count({m(r, 0), m(r, 1)});
+      }
+    }
+  }
+  std::printf(
+      "temple-ring SIFT: COLMAP %lld matches, bayon %lld, %lld common\n",
+      static_cast<long long>(num_theirs),
+      static_cast<long long>(num_ours),
+      static_cast<long long>(num_common));
+  ASSERT_GT(num_theirs, 3000);
+  EXPECT_GT(num_common, 0.99 * num_theirs);
+  EXPECT_GT(num_common, 0.99 * num_ours);
+  // COLMAP's geometric verification finds the ring's neighbours.
+  EXPECT_GE(theirs.ReadAllTwoViewGeometries().size(), 16u);
 }
 
 }  // namespace

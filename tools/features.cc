@@ -8,19 +8,24 @@
 namespace bayon {
 
 int RunFeatures(int argc, char** argv) {
-  std::string database_path, image_path, log_path;
+  std::string database_path, image_path, log_path, detector = "moravec";
   FeatureExtractionOptions options;
   MoravecOptions& moravec = options.moravec;
+  SiftOptions& sift = options.sift;
   CommandLine command(
       "features",
-      "Moravec interest points, thinned to the strongest per patch, for every "
-      "image of a COLMAP database: written to its keypoints table, the "
-      "interest values to bayon_keypoint_interest.");
+      "Interest points for every image of a COLMAP database: the paper's "
+      "Moravec points (matched by correlation), SIFT keypoints with RootSIFT "
+      "descriptors (matched by descriptor), or both; written to its keypoints "
+      "and descriptors tables, the interest values to "
+      "bayon_keypoint_interest.");
   CLI::App& app = command.app();
   app.add_option("--database_path", database_path, "COLMAP database")
       ->required();
   app.add_option("--image_path", image_path, "Folder of the images")
       ->required();
+  app.add_option("--detector", detector, "moravec, sift or both")
+      ->transform(CLI::IsMember({"moravec", "sift", "both"}));
   app.add_option("--window_size",
                  moravec.window_size,
                  "Operator window side, pixels (odd)");
@@ -35,6 +40,18 @@ int RunFeatures(int argc, char** argv) {
                  "At most this many points per image (0 = no limit)");
   app.add_option(
       "--border_px", moravec.border_px, "No points this close to the border");
+  app.add_option("--sift.max_num_features",
+                 sift.max_num_features,
+                 "SIFT: at most this many keypoints per image, the strongest");
+  app.add_option("--sift.contrast_threshold",
+                 sift.contrast_threshold,
+                 "SIFT: smallest DoG contrast kept (OpenCV's units)");
+  app.add_option("--sift.edge_threshold",
+                 sift.edge_threshold,
+                 "SIFT: largest ratio of principal curvatures kept");
+  app.add_option("--sift.max_image_size",
+                 sift.max_image_size,
+                 "SIFT: longer images are reduced to this first (0 = never)");
   app.add_option("--overwrite",
                  options.overwrite,
                  "1: replace existing keypoints (drops their matches)");
@@ -44,6 +61,7 @@ int RunFeatures(int argc, char** argv) {
                  log_path,
                  "Log file (default <database folder>/logs/features.log)");
   if (!command.Parse(argc, argv)) return 0;
+  options.detector = *FeatureDetectorFromName(detector);
   options.Check();
   CheckFileExists(database_path, "--database_path");
   CheckDirectoryExists(image_path, "--image_path");
@@ -58,7 +76,9 @@ int RunFeatures(int argc, char** argv) {
                               summary.num_extracted > 0
                                   ? summary.num_features / summary.num_extracted
                                   : 0,
-                              " per image), ",
+                              " per image, ",
+                              summary.num_sift,
+                              " SIFT), ",
                               summary.num_skipped,
                               " skipped, ",
                               summary.num_pairs_invalidated,

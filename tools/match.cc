@@ -8,24 +8,39 @@
 namespace bayon {
 
 int RunMatch(int argc, char** argv) {
-  std::string database_path, image_path, log_path, pairing = "ring";
+  std::string database_path, image_path, log_path, pairing = "auto";
   MatchingOptions options;
   CorrelationMatchingOptions& correlation = options.correlation;
   RelaxationOptions& relaxation = correlation.relaxation;
   CommandLine command(
       "match",
-      "Conjugate points for image pairs by correlation (7x7 windows, r >= "
-      "0.75, search window 1/16 of the image) and relaxation (continuity, "
-      "uniqueness, loser-takes-nothing), with in-plane rotations of 90/180 "
-      "degrees found automatically: to COLMAP's matches table, sub-pixel "
-      "points to bayon_matches.");
+      "Conjugate points for image pairs: Moravec points by correlation (7x7 "
+      "windows, r >= 0.75, search window 1/16 of the image) and relaxation "
+      "(continuity, uniqueness, loser-takes-nothing), with in-plane "
+      "rotations of 90/180 degrees found automatically; keypoints with "
+      "descriptors (SIFT) by descriptor (ratio test, mutual best): to "
+      "COLMAP's matches table, sub-pixel points to bayon_matches.");
   CLI::App& app = command.app();
   app.add_option("--database_path", database_path, "COLMAP database")
       ->required();
   app.add_option("--image_path", image_path, "Folder of the images")
       ->required();
-  app.add_option("--pairing", pairing, "ring, sequential, exhaustive or list")
-      ->transform(CLI::IsMember({"ring", "sequential", "exhaustive", "list"}));
+  app.add_option("--pairing",
+                 pairing,
+                 "auto (every pair up to max_exhaustive_images, else "
+                 "retrieval), retrieval (the most similar photographs), "
+                 "exhaustive, ring or sequential (in name order), or list")
+      ->transform(CLI::IsMember(
+          {"auto", "retrieval", "exhaustive", "ring", "sequential", "list"}));
+  app.add_option("--max_exhaustive_images",
+                 options.pairing.max_exhaustive_images,
+                 "auto: every pair up to this many images");
+  app.add_option("--retrieval_neighbors",
+                 options.pairing.retrieval_neighbors,
+                 "retrieval: each image with this many most similar ones");
+  app.add_option("--retrieval.vocabulary_size",
+                 options.retrieval.vocabulary_size,
+                 "retrieval: visual words learnt from the set");
   app.add_option("--num_neighbors",
                  options.pairing.num_neighbors,
                  "ring/sequential: successors paired with each image");
@@ -60,6 +75,17 @@ int RunMatch(int argc, char** argv) {
   app.add_option("--min_support",
                  relaxation.min_support,
                  "Consistent neighbours a match needs");
+  app.add_option("--descriptors.max_ratio",
+                 options.descriptors.max_ratio,
+                 "Descriptor matching: nearest / second-nearest distance "
+                 "below this (Lowe's ratio test)");
+  app.add_option("--descriptors.max_distance",
+                 options.descriptors.max_distance,
+                 "Descriptor matching: largest angle between descriptors, "
+                 "radians");
+  app.add_option("--descriptors.cross_check",
+                 options.descriptors.cross_check,
+                 "Descriptor matching: 1 = mutual nearest only");
   app.add_option("--lsm_refinement",
                  options.lsm_refinement,
                  "1: conjugate points refined by least-squares matching");

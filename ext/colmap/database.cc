@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -164,6 +165,15 @@ void BindFixedBlob(
 }
 
 }  // namespace
+
+double KeypointScale(const FeatureKeypoints& keypoints, int idx) {
+  if (keypoints.cols() == 4) return std::abs(keypoints(idx, 2));
+  if (keypoints.cols() < 6) return 1.0;
+  const double det =
+      static_cast<double>(keypoints(idx, 2)) * keypoints(idx, 5) -
+      static_cast<double>(keypoints(idx, 3)) * keypoints(idx, 4);
+  return std::sqrt(std::abs(det));
+}
 
 FeatureKeypoints KeypointsFromXY(const std::vector<Eigen::Vector2d>& xy) {
   FeatureKeypoints keypoints(xy.size(), 6);

@@ -56,6 +56,9 @@ using FeatureMatches =
 inline Eigen::Vector2d KeypointXY(const FeatureKeypoints& keypoints, int idx) {
   return Eigen::Vector2d(keypoints(idx, 0), keypoints(idx, 1));
 }
+// The scale of row `idx`: its third column in the 4-column form, sqrt |det|
+// of the affine shape in the 6-column form; 1 for the 2-column form.
+double KeypointScale(const FeatureKeypoints& keypoints, int idx);
 // N x 6 keypoints (COLMAP's written form) with an identity affine shape.
 FeatureKeypoints KeypointsFromXY(const std::vector<Eigen::Vector2d>& xy);
 

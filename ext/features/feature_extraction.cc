@@ -12,17 +12,71 @@
 #include <glog/logging.h>
 
 #include <filesystem>
+#include <limits>
 #include <map>
 
 namespace fs = std::filesystem;
 
 namespace bayon {
 
-void FeatureExtractionOptions::Check() const { moravec.Check(); }
+const char* FeatureDetectorName(FeatureDetector detector) {
+  switch (detector) {
+    case FeatureDetector::kMoravec:
+      return "moravec";
+    case FeatureDetector::kSift:
+      return "sift";
+    case FeatureDetector::kBoth:
+      return "both";
+  }
+  return "?";
+}
 
-std::vector<InterestPoint> DetectImageFeatures(const std::string& image_file,
-                                               const MoravecOptions& options) {
-  return DetectMoravecPoints(ReadImageGrayFloat(image_file), options);
+std::optional<FeatureDetector> FeatureDetectorFromName(
+    const std::string& name) {
+  for (FeatureDetector detector : {FeatureDetector::kMoravec,
+                                   FeatureDetector::kSift,
+                                   FeatureDetector::kBoth}) {
+    if (name == FeatureDetectorName(detector)) return detector;
+  }
+  return std::nullopt;
+}
+
+void FeatureExtractionOptions::Check() const {
+  if (detector != FeatureDetector::kSift) moravec.Check();
+  if (detector != FeatureDetector::kMoravec) sift.Check();
+}
+
+ImageFeatures DetectImageFeatures(const std::string& image_file,
+                                  const FeatureExtractionOptions& options) {
+  const cv::Mat gray = ReadImageGrayFloat(image_file);
+  ImageFeatures features;
+  std::vector<Eigen::Vector2d> moravec_xy;
+  if (options.detector != FeatureDetector::kSift) {
+    for (const InterestPoint& point :
+         DetectMoravecPoints(gray, options.moravec)) {
+      moravec_xy.push_back(point.xy.cast<double>());
+      features.interest.push_back(point.interest);
+    }
+  }
+  if (options.detector == FeatureDetector::kMoravec) {
+    features.keypoints = KeypointsFromXY(moravec_xy);
+    return features;
+  }
+  const SiftFeatures sift = DetectSiftFeatures(gray, options.sift);
+  features.num_sift = static_cast<int>(sift.keypoints.rows());
+  const int num_moravec = static_cast<int>(moravec_xy.size());
+  const int n = num_moravec + features.num_sift;
+  features.keypoints.resize(n, 6);
+  features.descriptors.resize(n, 128);
+  if (num_moravec > 0) {
+    features.keypoints.topRows(num_moravec) = KeypointsFromXY(moravec_xy);
+    features.descriptors.topRows(num_moravec) =
+        ComputeUprightSiftDescriptors(gray, moravec_xy, options.sift);
+  }
+  features.keypoints.bottomRows(features.num_sift) = sift.keypoints;
+  features.descriptors.bottomRows(features.num_sift) = sift.descriptors;
+  features.interest.resize(n, std::numeric_limits<float>::quiet_NaN());
+  return features;
 }
 
 namespace {
@@ -31,7 +85,7 @@ struct Job {
   DatabaseImage image;
   std::string path;
   ImageFeatureResult result;
-  std::vector<InterestPoint> points;
+  ImageFeatures features;
 };
 
 // Every image must be on disk with the size its camera row claims, checked
@@ -88,14 +142,20 @@ FeatureExtractionSummary ExtractFeatures(
   for (int i = 0; i < static_cast<int>(jobs.size()); ++i) {
     if (!jobs[i].result.skipped) todo.push_back(i);
   }
-  Progress progress("Extracting Moravec points", todo.size(), "images");
+  Progress progress(
+      StrCat("Extracting ", FeatureDetectorName(options.detector), " points"),
+      todo.size(),
+      "images");
   ParallelFor(todo.size(), options.num_threads, [&](int k) {
     Job& job = jobs[todo[k]];
     Timer image_timer;
-    job.points = DetectImageFeatures(job.path, options.moravec);
-    job.result.num_features = static_cast<int>(job.points.size());
-    job.result.patch_size =
-        ThinningPatchSize(options.moravec, job.result.width, job.result.height);
+    job.features = DetectImageFeatures(job.path, options);
+    job.result.num_features = static_cast<int>(job.features.keypoints.rows());
+    job.result.num_sift = job.features.num_sift;
+    if (options.detector != FeatureDetector::kSift) {
+      job.result.patch_size = ThinningPatchSize(
+          options.moravec, job.result.width, job.result.height);
+    }
     job.result.seconds = image_timer.Seconds();
     progress.Add();
   });
@@ -114,23 +174,24 @@ FeatureExtractionSummary ExtractFeatures(
       }
       summary.num_pairs_invalidated +=
           DeleteKeypointDependents(&database, job.image.image_id);
-      std::vector<Eigen::Vector2d> xy;
       KeypointInterestRecord record;
+      record.detector = FeatureDetectorName(options.detector);
       record.window_size = options.moravec.window_size;
       record.patch_size = job.result.patch_size;
-      xy.reserve(job.points.size());
-      for (const InterestPoint& point : job.points) {
-        xy.push_back(point.xy.cast<double>());
-        record.interest.push_back(point.interest);
+      record.interest = std::move(job.features.interest);
+      database.WriteKeypoints(job.image.image_id, job.features.keypoints);
+      if (job.features.descriptors.rows() > 0) {
+        database.WriteDescriptors(job.image.image_id, job.features.descriptors);
       }
-      database.WriteKeypoints(job.image.image_id, KeypointsFromXY(xy));
       WriteKeypointInterest(&database, job.image.image_id, record);
       LOG(INFO) << job.result.name << ": " << job.result.num_features
-                << " points (" << job.result.width << "x" << job.result.height
-                << ", patch " << job.result.patch_size << " px) in "
-                << job.result.seconds << " s";
+                << " points, " << job.result.num_sift << " of them SIFT ("
+                << job.result.width << "x" << job.result.height << ", patch "
+                << job.result.patch_size << " px) in " << job.result.seconds
+                << " s";
       ++summary.num_extracted;
       summary.num_features += job.result.num_features;
+      summary.num_sift += job.result.num_sift;
       summary.images.push_back(job.result);
     }
     transaction.Commit();

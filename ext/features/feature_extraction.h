@@ -1,22 +1,40 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// `bayon features`: Moravec interest points (moravec.h) for every image of a
-// COLMAP database, written to COLMAP's `keypoints` table (N x 6 rows, the
-// form COLMAP writes, with an identity affine shape) and the interest values
-// to bayon_keypoint_interest. No descriptors are written: bayon matches by
-// correlation on the images themselves (ext/matching).
+// `bayon features`: interest points for every image of a COLMAP database,
+// written to COLMAP's `keypoints` table (N x 6 rows, the form COLMAP
+// writes), by one of three detectors:
+// - moravec: the paper's Moravec points (moravec.h), identity affine shape,
+//   no descriptors; `bayon match` matches them by correlation on the images
+//   themselves (ext/matching);
+// - sift: SIFT keypoints and RootSIFT descriptors (sift.h), matched by
+//   descriptor; COLMAP's own matchers read them too;
+// - both: the Moravec points, then the SIFT keypoints, with descriptors for
+//   all (upright ones for the Moravec points), so that COLMAP's matchers can
+//   still run on the database.
+// bayon_keypoint_interest holds a value per keypoint row: the Moravec
+// interest, or NaN for a SIFT keypoint (which `bayon match` then matches by
+// its descriptor, not by correlation).
 #pragma once
 
 #include "ext/core/types.h"
 #include "ext/features/moravec.h"
+#include "ext/features/sift.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace bayon {
 
+enum class FeatureDetector { kMoravec, kSift, kBoth };
+const char* FeatureDetectorName(FeatureDetector detector);
+// nullopt for an unknown name.
+std::optional<FeatureDetector> FeatureDetectorFromName(const std::string& name);
+
 struct FeatureExtractionOptions {
+  FeatureDetector detector = FeatureDetector::kMoravec;
   MoravecOptions moravec;
+  SiftOptions sift;
   // Replace the keypoints of images that have some. Replacing keypoints
   // invalidates everything indexed by them, so the image's descriptors and
   // the matches, two-view geometries and bayon pair rows of its pairs are
@@ -33,6 +51,7 @@ struct ImageFeatureResult {
   int height = 0;
   int patch_size = 0;  // the thinning patch side used
   int num_features = 0;
+  int num_sift = 0;  // of num_features
   double seconds = 0;
   bool skipped = false;
   std::string reason;  // why it was skipped
@@ -43,15 +62,24 @@ struct FeatureExtractionSummary {
   int num_extracted = 0;
   int num_skipped = 0;
   int64_t num_features = 0;
+  int64_t num_sift = 0;           // of num_features
   int num_pairs_invalidated = 0;  // pairs whose matches were removed
   double seconds = 0;
 };
 
-// Interest points of one image file (any size, depth and channel count that
+// The keypoints of one image as `bayon features` writes them.
+struct ImageFeatures {
+  FeatureKeypoints keypoints;      // N x 6
+  FeatureDescriptors descriptors;  // N x 128, or empty (moravec)
+  std::vector<float> interest;     // per row; NaN for SIFT keypoints
+  int num_sift = 0;
+};
+
+// The features of one image file (any size, depth and channel count that
 // OpenCV reads; colour is reduced to luminance). Throws InputError for an
 // unreadable file.
-std::vector<InterestPoint> DetectImageFeatures(const std::string& image_file,
-                                               const MoravecOptions& options);
+ImageFeatures DetectImageFeatures(const std::string& image_file,
+                                  const FeatureExtractionOptions& options);
 
 // Runs the operator on every image of the database. Everything is checked
 // before anything is written (InputError, database unchanged): the database

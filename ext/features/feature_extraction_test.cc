@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
 #include <filesystem>
 
 #include "tests/testing.h"
@@ -77,6 +78,55 @@ TEST(FeatureExtraction, WritesKeypointsAndInterestForAnyDepth) {
   EXPECT_EQ(interest->detector, "moravec");
   EXPECT_EQ(interest->interest.size(), static_cast<size_t>(a.rows()));
   EXPECT_GE(interest->interest.back(), SmallOptions().moravec.min_interest);
+  EXPECT_FALSE(database.ExistsDescriptors(1));
+}
+
+TEST(FeatureExtraction, SiftAndBothGiveEveryKeypointADescriptor) {
+  const std::string dir = MakeWorkspace("features_sift");
+  const std::string db = dir + "/database.db";
+  FeatureExtractionOptions options = SmallOptions();
+  ExtractFeatures(db, dir + "/images", options);
+  FeatureKeypoints moravec;
+  {
+    Database database(db, Database::Mode::kReadOnly);
+    moravec = database.ReadKeypoints(1);
+  }
+  options.overwrite = true;
+  options.detector = FeatureDetector::kSift;
+  const FeatureExtractionSummary sift =
+      ExtractFeatures(db, dir + "/images", options);
+  EXPECT_EQ(sift.num_sift, sift.num_features);
+  int num_sift = 0;
+  {
+    Database database(db, Database::Mode::kReadOnly);
+    const FeatureKeypoints keypoints = database.ReadKeypoints(1);
+    num_sift = static_cast<int>(keypoints.rows());
+    ASSERT_GT(num_sift, 20);
+    EXPECT_EQ(database.ReadDescriptors(1).rows(), num_sift);
+    const auto interest = ReadKeypointInterest(&database, 1);
+    ASSERT_TRUE(interest.has_value());
+    EXPECT_EQ(interest->detector, "sift");
+    ASSERT_EQ(interest->interest.size(), static_cast<size_t>(num_sift));
+    for (float value : interest->interest) EXPECT_TRUE(std::isnan(value));
+  }
+  // Both: the Moravec points as before, then the SIFT keypoints.
+  options.detector = FeatureDetector::kBoth;
+  ExtractFeatures(db, dir + "/images", options);
+  Database database(db, Database::Mode::kReadOnly);
+  const FeatureKeypoints keypoints = database.ReadKeypoints(1);
+  const int num_moravec = static_cast<int>(moravec.rows());
+  ASSERT_EQ(keypoints.rows(), num_moravec + num_sift);
+  EXPECT_EQ(keypoints.topRows(num_moravec), moravec);
+  EXPECT_EQ(database.ReadDescriptors(1).rows(), keypoints.rows());
+  const auto interest = ReadKeypointInterest(&database, 1);
+  ASSERT_TRUE(interest.has_value());
+  EXPECT_EQ(interest->detector, "both");
+  for (int i = 0; i < keypoints.rows(); ++i) {
+    EXPECT_EQ(std::isfinite(interest->interest[i]), i < num_moravec) << i;
+  }
+  // Back to Moravec alone: the descriptors go with the old keypoints.
+  options.detector = FeatureDetector::kMoravec;
+  ExtractFeatures(db, dir + "/images", options);
   EXPECT_FALSE(database.ExistsDescriptors(1));
 }
 

@@ -2,6 +2,7 @@
 #include "ext/matching/matching.h"
 
 #include "ext/colmap/database.h"
+#include "ext/colmap/table_features.h"
 #include "ext/colmap/table_matches.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
@@ -11,9 +12,12 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -23,8 +27,10 @@ namespace bayon {
 
 void MatchingOptions::Check() const {
   pairing.Check();
+  retrieval.Check();
   patches.Check();
   correlation.Check();
+  descriptors.Check();
   refinement.Check();
   const std::string shift_rule =
       StrCat("< patches.refine_radius (", patches.refine_radius, ")");
@@ -44,9 +50,50 @@ struct ImageData {
   DatabaseImage image;
   std::string path;
   int num_keypoints = 0;
+  // Of the images a pair needs, once they are read: the keypoints, which
+  // rows are matched by correlation (their windows in `patches`) and which
+  // by descriptor.
+  FeatureKeypoints keypoints;
+  std::vector<uint8_t> by_correlation;
+  int num_correlation = 0;
+  FeatureDescriptors descriptors;  // empty, or a row per keypoint
+  std::vector<int> descriptor_rows;
   std::unique_ptr<ImagePatches> patches;
   cv::Mat gray;  // for the least-squares refinement
 };
+
+// A keypoint with a Moravec interest value is matched by correlation; one
+// without (NaN in bayon_keypoint_interest: bayon's SIFT keypoints) by its
+// descriptor. An image without an interest record (another detector's
+// keypoints) is matched by descriptor if it has descriptors, else by
+// correlation.
+void ClassifyKeypoints(Database* database, ImageData* entry) {
+  const image_t image_id = entry->image.image_id;
+  entry->keypoints = database->ReadKeypoints(image_id);
+  const int n = static_cast<int>(entry->keypoints.rows());
+  if (database->ExistsDescriptors(image_id)) {
+    FeatureDescriptors descriptors = database->ReadDescriptors(image_id);
+    if (descriptors.rows() == n && descriptors.cols() == 128) {
+      entry->descriptors = std::move(descriptors);
+    }
+  }
+  const bool has_descriptors = entry->descriptors.rows() > 0;
+  const std::optional<KeypointInterestRecord> record =
+      ReadKeypointInterest(database, image_id);
+  const bool has_interest =
+      record && record->interest.size() == static_cast<size_t>(n);
+  entry->by_correlation.assign(n, 0);
+  for (int i = 0; i < n; ++i) {
+    const bool correlate =
+        has_interest ? std::isfinite(record->interest[i]) : !has_descriptors;
+    if (correlate) {
+      entry->by_correlation[i] = 1;
+      ++entry->num_correlation;
+    } else if (has_descriptors) {
+      entry->descriptor_rows.push_back(i);
+    }
+  }
+}
 
 std::map<image_t, ImageData> ReadImageList(Database* database,
                                            const std::string& image_path) {
@@ -102,33 +149,90 @@ struct PairJob {
   PairMatches matches;
 };
 
+// A SIFT keypoint is located to about a correlation peak's precision at
+// the pyramid's base scale (sigma 1.6 px), and proportionally less
+// precisely at coarser scales, whose samples are proportionally farther
+// apart.
+constexpr double kSiftBaseScale = 1.6;
+
+void AddDescriptorMatches(const ImageData& image1,
+                          const ImageData& image2,
+                          const MatchingOptions& options,
+                          PairMatches* matches) {
+  const std::vector<DescriptorMatch> found =
+      MatchDescriptors(image1.descriptors,
+                       image1.descriptor_rows,
+                       image2.descriptors,
+                       image2.descriptor_rows,
+                       options.descriptors);
+  const int first = static_cast<int>(matches->matches.rows());
+  matches->matches.conservativeResize(first + found.size(), 2);
+  for (size_t k = 0; k < found.size(); ++k) {
+    const DescriptorMatch& match = found[k];
+    matches->matches(first + k, 0) = static_cast<uint32_t>(match.idx1);
+    matches->matches(first + k, 1) = static_cast<uint32_t>(match.idx2);
+    matches->reference_xy1.push_back(KeypointXY(image1.keypoints, match.idx1));
+    matches->refined_xy2.push_back(KeypointXY(image2.keypoints, match.idx2));
+    // The descriptors' cosine in place of a correlation coefficient.
+    matches->ncc.push_back(std::cos(match.distance));
+    const double scale = std::max(KeypointScale(image1.keypoints, match.idx1),
+                                  KeypointScale(image2.keypoints, match.idx2));
+    matches->sigma_px.push_back(
+        static_cast<float>(options.correlation.peak_sigma_px *
+                           std::max(1.0, scale / kSiftBaseScale)));
+  }
+}
+
 void MatchPair(const std::map<image_t, ImageData>& data,
                const MatchingOptions& options,
                PairJob* job) {
   Timer timer;
   PairMatchReport& report = job->report;
-  const ImagePatches& image1 = *data.at(report.image_id1).patches;
-  const ImagePatches& image2 = *data.at(report.image_id2).patches;
+  const ImageData& data1 = data.at(report.image_id1);
+  const ImageData& data2 = data.at(report.image_id2);
+  const ImagePatches& image1 = *data1.patches;
+  const ImagePatches& image2 = *data2.patches;
   const int valid1 = image1.NumValid(), valid2 = image2.NumValid();
-  if (std::min(valid1, valid2) < options.min_num_matches) {
-    report.reason = StrCat("too few points to match (",
-                           valid1,
-                           " and ",
-                           valid2,
-                           " usable keypoints, ",
-                           options.min_num_matches,
-                           " needed)");
+  const int described1 = static_cast<int>(data1.descriptor_rows.size());
+  const int described2 = static_cast<int>(data2.descriptor_rows.size());
+  const bool correlate = std::min(valid1, valid2) >= options.min_num_matches;
+  const bool describe =
+      std::min(described1, described2) >= options.min_num_matches;
+  if (!correlate && !describe) {
+    report.reason =
+        StrCat("too few points to match (",
+               valid1,
+               " and ",
+               valid2,
+               " usable keypoints",
+               described1 + described2 > 0 ? StrCat(" for correlation, ",
+                                                    described1,
+                                                    " and ",
+                                                    described2,
+                                                    " with descriptors")
+                                           : std::string(),
+               ", ",
+               options.min_num_matches,
+               " needed)");
     report.seconds = timer.Seconds();
     return;
   }
-  job->matches = MatchImagePatches(image1, image2, options.correlation);
-  if (options.lsm_refinement) {
+  if (correlate) {
+    job->matches = MatchImagePatches(image1, image2, options.correlation);
+  }
+  if (correlate && options.lsm_refinement) {
     report.refinement = RefineConjugatePoints(data.at(report.image_id1).gray,
                                               data.at(report.image_id2).gray,
                                               image1.xy,
                                               image2.xy,
                                               options.refinement,
                                               &job->matches);
+  }
+  if (describe) {
+    const int before = static_cast<int>(job->matches.matches.rows());
+    AddDescriptorMatches(data1, data2, options, &job->matches);
+    report.num_descriptor_matches =
+        static_cast<int>(job->matches.matches.rows()) - before;
   }
   const PairMatches& matches = job->matches;
   report.rotation_deg = matches.mapping.RotationDeg();
@@ -177,11 +281,14 @@ void LogPair(const MatchingOptions& options, const PairMatchReport& report) {
   if (report.skipped) {
     line << "skipped, " << report.reason;
   } else {
-    line << report.num_points1 << "/" << report.num_points2 << " points, "
-         << "rotation " << report.rotation_deg << " deg ("
-         << (report.mapping_found ? "" : "no ") << "global mapping, "
-         << report.mapping_inliers << " votes), " << report.num_candidates
-         << " candidates, " << report.num_relaxed << " after relaxation, ";
+    line << report.num_points1 << "/" << report.num_points2 << " points, ";
+    // Correlation's steps, where it ran.
+    if (report.num_candidates > 0 || report.num_descriptor_matches == 0) {
+      line << "rotation " << report.rotation_deg << " deg ("
+           << (report.mapping_found ? "" : "no ") << "global mapping, "
+           << report.mapping_inliers << " votes), " << report.num_candidates
+           << " candidates, " << report.num_relaxed << " after relaxation, ";
+    }
     if (options.lsm_refinement) {
       const ConjugateRefinementReport& lsm = report.refinement;
       line << lsm.NumRejected() << " not refined by LSM (";
@@ -192,6 +299,9 @@ void LogPair(const MatchingOptions& options, const PairMatchReport& report) {
       }
       line << "median move " << lsm.median_shift_px << " px), "
            << lsm.num_propagated << " propagated, ";
+    }
+    if (report.num_descriptor_matches > 0) {
+      line << report.num_descriptor_matches << " by descriptor, ";
     }
     line << report.num_matches << " matches, " << report.seconds << " s";
     if (!report.written) line << " -- not written: " << report.reason;
@@ -218,8 +328,24 @@ MatchingSummary MatchImages(const std::string& database_path,
   std::map<image_t, ImageData> data = ReadImageList(&database, image_path);
   std::vector<DatabaseImage> images;
   for (const auto& [image_id, entry] : data) images.push_back(entry.image);
-  const std::vector<std::pair<image_t, image_t>> pairs =
-      SelectImagePairs(images, options.pairing);
+  std::optional<Eigen::MatrixXd> similarity;
+  if (UsesRetrieval(options.pairing, static_cast<int>(images.size()))) {
+    std::set<image_t> all;
+    std::vector<std::string> files;
+    for (const DatabaseImage& image : images) {
+      all.insert(image.image_id);
+      files.push_back(data.at(image.image_id).path);
+    }
+    CheckImageFiles(&database, image_path, data, all);
+    RetrievalOptions retrieval = options.retrieval;
+    retrieval.num_threads = options.num_threads;
+    similarity = ImageSimilarities(files, retrieval);
+  }
+  const std::vector<std::pair<image_t, image_t>> pairs = SelectImagePairs(
+      images, options.pairing, similarity ? &*similarity : nullptr);
+  LOG(INFO) << pairs.size() << " pairs of " << images.size() << " images ("
+            << PairingModeName(options.pairing.mode)
+            << (similarity ? ", chosen by similarity" : "") << ")";
 
   MatchingSummary summary;
   std::vector<PairJob> jobs;
@@ -252,21 +378,29 @@ MatchingSummary MatchImages(const std::string& database_path,
   // Every image is read once and cut into windows; the pairs then share them.
   const std::vector<image_t> needed_ids(needed.begin(), needed.end());
   {
-    std::vector<FeatureKeypoints> keypoints;
     for (image_t image_id : needed_ids) {
-      keypoints.push_back(database.ReadKeypoints(image_id));
+      ClassifyKeypoints(&database, &data.at(image_id));
     }
     Progress progress("Reading images", needed_ids.size(), "images");
     ParallelFor(needed_ids.size(), options.num_threads, [&](int k) {
       ImageData& entry = data.at(needed_ids[k]);
-      std::vector<Eigen::Vector2d> xy(keypoints[k].rows());
-      for (int i = 0; i < keypoints[k].rows(); ++i) {
-        xy[i] = KeypointXY(keypoints[k], i);
+      std::vector<Eigen::Vector2d> xy(entry.keypoints.rows());
+      for (int i = 0; i < entry.keypoints.rows(); ++i) {
+        xy[i] = KeypointXY(entry.keypoints, i);
       }
-      cv::Mat gray = ReadImageGrayFloat(entry.path);
-      entry.patches = std::make_unique<ImagePatches>(
-          ExtractImagePatches(gray, xy, options.patches));
-      if (options.lsm_refinement) entry.gray = std::move(gray);
+      entry.patches = std::make_unique<ImagePatches>();
+      if (entry.num_correlation > 0) {
+        cv::Mat gray = ReadImageGrayFloat(entry.path);
+        *entry.patches = ExtractImagePatches(gray, xy, options.patches);
+        if (options.lsm_refinement) entry.gray = std::move(gray);
+      } else {
+        entry.patches->xy = xy;
+        entry.patches->valid.assign(xy.size(), 0);
+      }
+      // Keypoints matched by descriptor take no part in the correlation.
+      for (size_t i = 0; i < xy.size(); ++i) {
+        if (!entry.by_correlation[i]) entry.patches->valid[i] = 0;
+      }
       progress.Add();
     });
     progress.Finish();

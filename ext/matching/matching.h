@@ -1,16 +1,24 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // `bayon match`: conjugate points for the selected image pairs of a COLMAP
-// database (pair_selection.h), by correlation and relaxation on the images
-// themselves (correlation_matcher.h), from the keypoints already in the
-// database (`bayon features`, or any other detector's). Written to COLMAP's
-// `matches` table and, with the sub-pixel conjugate points and the pair's
-// rotation, to bayon_matches (ext/colmap/table_matches.h).
+// database (pair_selection.h), from the keypoints already in the database
+// (`bayon features`, or any other detector's):
+// - keypoints with a Moravec interest value (bayon_keypoint_interest), and
+//   every keypoint of an image without descriptors, by correlation and
+//   relaxation on the images themselves (correlation_matcher.h);
+// - the others, which have descriptors (SIFT: `bayon features --detector
+//   sift|both`, or COLMAP's feature_extractor), by descriptor
+//   (descriptor_matcher.h).
+// Written to COLMAP's `matches` table and, with the sub-pixel conjugate
+// points and the pair's rotation, to bayon_matches
+// (ext/colmap/table_matches.h).
 #pragma once
 
 #include "ext/core/types.h"
 #include "ext/matching/conjugate_refinement.h"
 #include "ext/matching/correlation_matcher.h"
+#include "ext/matching/descriptor_matcher.h"
+#include "ext/matching/image_retrieval.h"
 #include "ext/matching/pair_selection.h"
 
 #include <string>
@@ -20,8 +28,10 @@ namespace bayon {
 
 struct MatchingOptions {
   PairingOptions pairing;
+  RetrievalOptions retrieval;  // where the pairing chooses by similarity
   PatchOptions patches;
   CorrelationMatchingOptions correlation;
+  DescriptorMatchingOptions descriptors;
   // Least-squares refinement and propagation of the conjugate points
   // (conjugate_refinement.h); off: the correlation peaks, as the paper's
   // matching gives them. Off by default: on the rendered tower it makes the
@@ -54,6 +64,7 @@ struct PairMatchReport {
   int mapping_inliers = 0;
   int num_candidates = 0;
   int num_relaxed = 0;
+  int num_descriptor_matches = 0;  // of num_matches
   int num_matches = 0;
   // Least-squares refinement: matches it rejected (kept at their
   // correlation peaks, or dropped) by reason, the median move from the

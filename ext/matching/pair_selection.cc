@@ -4,6 +4,8 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 
+#include <glog/logging.h>
+
 #include <algorithm>
 #include <map>
 #include <set>
@@ -16,6 +18,8 @@ std::optional<PairingMode> PairingModeFromName(const std::string& name) {
   if (name == "sequential") return PairingMode::kSequential;
   if (name == "exhaustive") return PairingMode::kExhaustive;
   if (name == "list") return PairingMode::kList;
+  if (name == "retrieval") return PairingMode::kRetrieval;
+  if (name == "auto") return PairingMode::kAuto;
   return std::nullopt;
 }
 
@@ -29,6 +33,10 @@ const char* PairingModeName(PairingMode mode) {
       return "exhaustive";
     case PairingMode::kList:
       return "list";
+    case PairingMode::kRetrieval:
+      return "retrieval";
+    case PairingMode::kAuto:
+      return "auto";
   }
   return "?";
 }
@@ -38,9 +46,23 @@ void PairingOptions::Check() const {
               "PairingOptions.num_neighbors",
               ">= 1",
               num_neighbors);
+  CheckOption(max_exhaustive_images >= 2,
+              "PairingOptions.max_exhaustive_images",
+              ">= 2",
+              max_exhaustive_images);
+  CheckOption(retrieval_neighbors >= 1,
+              "PairingOptions.retrieval_neighbors",
+              ">= 1",
+              retrieval_neighbors);
   if (mode == PairingMode::kList && pair_list_path.empty()) {
     ThrowInputError("--pairing list needs --pair_list_path");
   }
+}
+
+bool UsesRetrieval(const PairingOptions& options, int num_images) {
+  return options.mode == PairingMode::kRetrieval ||
+         (options.mode == PairingMode::kAuto &&
+          num_images > options.max_exhaustive_images);
 }
 
 namespace {
@@ -87,10 +109,41 @@ std::vector<std::pair<image_t, image_t>> ReadPairList(
   return pairs;
 }
 
+// Each image (in name order) with its k most similar others.
+std::vector<std::pair<image_t, image_t>> MostSimilarPairs(
+    const std::vector<DatabaseImage>& images,
+    const std::vector<DatabaseImage>& sorted,
+    const Eigen::MatrixXd& similarity,
+    int k) {
+  std::map<image_t, int> index;
+  for (size_t i = 0; i < images.size(); ++i) {
+    index[images[i].image_id] = static_cast<int>(i);
+  }
+  const int n = static_cast<int>(sorted.size());
+  std::vector<std::pair<image_t, image_t>> pairs;
+  for (int i = 0; i < n; ++i) {
+    std::vector<int> others;
+    for (int j = 0; j < n; ++j) {
+      if (j != i) others.push_back(j);
+    }
+    const int a = index.at(sorted[i].image_id);
+    std::stable_sort(others.begin(), others.end(), [&](int x, int y) {
+      return similarity(a, index.at(sorted[x].image_id)) >
+             similarity(a, index.at(sorted[y].image_id));
+    });
+    others.resize(std::min<size_t>(others.size(), k));
+    for (int j : others)
+      pairs.emplace_back(sorted[i].image_id, sorted[j].image_id);
+  }
+  return pairs;
+}
+
 }  // namespace
 
 std::vector<std::pair<image_t, image_t>> SelectImagePairs(
-    const std::vector<DatabaseImage>& images, const PairingOptions& options) {
+    const std::vector<DatabaseImage>& images,
+    const PairingOptions& options,
+    const Eigen::MatrixXd* similarity) {
   options.Check();
   std::vector<DatabaseImage> sorted = images;
   std::sort(sorted.begin(),
@@ -100,20 +153,33 @@ std::vector<std::pair<image_t, image_t>> SelectImagePairs(
             });
   const int n = static_cast<int>(sorted.size());
   std::vector<std::pair<image_t, image_t>> raw;
-  switch (options.mode) {
+  PairingMode mode = options.mode;
+  if (mode == PairingMode::kAuto) {
+    mode = UsesRetrieval(options, n) ? PairingMode::kRetrieval
+                                     : PairingMode::kExhaustive;
+  }
+  switch (mode) {
     case PairingMode::kRing:
     case PairingMode::kSequential:
       for (int i = 0; i < n; ++i) {
         for (int d = 1; d <= options.num_neighbors; ++d) {
           int j = i + d;
           if (j >= n) {
-            if (options.mode == PairingMode::kSequential) break;
+            if (mode == PairingMode::kSequential) break;
             j %= n;
           }
           if (j != i) raw.emplace_back(sorted[i].image_id, sorted[j].image_id);
         }
       }
       break;
+    case PairingMode::kRetrieval:
+      CHECK(similarity != nullptr && similarity->rows() == n &&
+            similarity->cols() == n)
+          << "retrieval needs the images' similarities";
+      raw = MostSimilarPairs(
+          images, sorted, *similarity, options.retrieval_neighbors);
+      break;
+    case PairingMode::kAuto:  // resolved above
     case PairingMode::kExhaustive:
       for (int i = 0; i < n; ++i) {
         for (int j = i + 1; j < n; ++j) {

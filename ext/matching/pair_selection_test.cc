@@ -34,8 +34,43 @@ std::set<std::pair<image_t, image_t>> AsSet(
   return set;
 }
 
+// Auto matches every pair up to its limit, then the most similar ones;
+// retrieval ignores the names: images that look alike are paired whatever
+// their order.
+TEST(PairSelection, AutoAndRetrievalFollowSimilarityNotNames) {
+  // Similar: ids 1-2, 2-3, 3-4, 4-5 (a chain in id order, which the names
+  // scramble); everything else unlike.
+  Eigen::MatrixXd similarity = Eigen::MatrixXd::Identity(5, 5);
+  for (int i = 0; i + 1 < 5; ++i) {
+    similarity(i, i + 1) = similarity(i + 1, i) = 0.5 + 0.1 * i;
+  }
+  PairingOptions options;
+  EXPECT_EQ(options.mode, PairingMode::kAuto);
+  EXPECT_FALSE(UsesRetrieval(options, 5));
+  EXPECT_EQ(SelectImagePairs(FiveImages(), options).size(), 10u);
+  options.max_exhaustive_images = 4;
+  EXPECT_TRUE(UsesRetrieval(options, 5));
+  options.retrieval_neighbors = 1;
+  const auto chain =
+      AsSet(SelectImagePairs(FiveImages(), options, &similarity));
+  const std::set<std::pair<image_t, image_t>> expected = {
+      {1, 2}, {2, 3}, {3, 4}, {4, 5}};
+  EXPECT_EQ(chain, expected);
+  options.mode = PairingMode::kRetrieval;
+  options.max_exhaustive_images = 50;
+  EXPECT_TRUE(UsesRetrieval(options, 5));
+  EXPECT_EQ(AsSet(SelectImagePairs(FiveImages(), options, &similarity)),
+            expected);
+  // Two neighbours each: the chain and its second links.
+  options.retrieval_neighbors = 2;
+  EXPECT_GT(SelectImagePairs(FiveImages(), options, &similarity).size(), 4u);
+  options.retrieval_neighbors = 0;
+  EXPECT_THROW(options.Check(), InputError);
+}
+
 TEST(PairSelection, RingWrapsAroundInNameOrder) {
   PairingOptions options;
+  options.mode = PairingMode::kRing;
   options.num_neighbors = 1;
   // Name order a(2) b(4) c(1) d(5) e(3), then back to a.
   const auto ring = AsSet(SelectImagePairs(FiveImages(), options));
@@ -85,6 +120,9 @@ TEST(PairSelection, ListFileWithLineNumbersInErrors) {
   expect_error("a.png a.png\n", "with itself");
   options.pair_list_path.clear();
   EXPECT_THROW(options.Check(), InputError);
+  EXPECT_EQ(PairingModeFromName("auto"), PairingMode::kAuto);
+  EXPECT_EQ(PairingModeFromName("retrieval"), PairingMode::kRetrieval);
+  EXPECT_STREQ(PairingModeName(PairingMode::kRetrieval), "retrieval");
 }
 
 }  // namespace
