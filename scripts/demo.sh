@@ -23,15 +23,12 @@ case "$set_name" in
   temple)
     images="$data/temple-ring"
     truth=(--format middlebury --input_path "$data/temple-ring/templeSR_par.txt")
-    config=configs/ring.ini
-    pairs="[match]
-pairing = exhaustive" ;;
+    config=configs/ring.ini ;;
   fountain)
     images="$data/fountain-P11/images"
     truth=(--format strecha --input_path "$data/fountain-P11/gt_dense_cameras"
       --image_path "$images")
-    config=configs/facade.ini
-    pairs="" ;;
+    config=configs/facade.ini ;;
   *) echo "demo.sh: unknown set '$set_name' (temple or fountain)" >&2; exit 2 ;;
 esac
 [ -d "$images" ] || {
@@ -63,7 +60,6 @@ cat >"$ws/demo.ini" <<INI
 [import]
 camera_model = $model
 camera_params = $params
-$pairs
 [adjust]
 datum = free
 self_calibration = none
