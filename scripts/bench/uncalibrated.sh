@@ -30,39 +30,6 @@ source "$(dirname "$0")/lib/timing.sh"
 source "$(dirname "$0")/lib/bayon_chain.sh"
 source "$(dirname "$0")/lib/colmap.sh"
 
-# The truth's camera: "fx fy cx cy width height".
-truth_camera() {
-  grep -v '^#' "$1/cameras.txt" | head -1 | awk '{ print $5, $6, $7, $8, $3, $4 }'
-}
-
-# bayon_run WS IMAGES MODE TRUTH MATCH_ARGS...
-bayon_run() {
-  local ws="$1" images="$2" mode="$3" truth="$4"
-  shift 4
-  local db="$ws/database.db"
-  local fx fy cx cy width height
-  read -r fx fy cx cy width height < <(truth_camera "$truth")
-  local import_args=() self_calibration=significant
-  case "$mode" in
-    calibrated)
-      import_args=(--camera_model PINHOLE --camera_params "$fx,$fy,$cx,$cy")
-      self_calibration=none ;;
-    nothing) ;;
-    focal5)
-      # A 10 um pixel: the lens in mm that gives 1.05 x the true focal length.
-      import_args=(--pixel_size_um 10 --focal_length_mm
-        "$(python3 -c "print(1.05 * ($fx + $fy) / 2 * 0.01)")") ;;
-  esac
-  timed "$ws/import" "$BAYON" import --image_path "$images" --database_path "$db" \
-    --single_camera 1 "${import_args[@]}"
-  bayon_tie_points "$ws" "$db" "$images" "$@"
-  timed "$ws/strip" "$BAYON" strip --database_path "$db" \
-    --output_path "$ws/initial" --num_threads "$threads" || return 0
-  timed "$ws/adjust" "$BAYON" adjust --database_path "$db" \
-    --input_path "$ws/initial" --output_path "$ws/model" --datum free \
-    --self_calibration "$self_calibration" --num_threads "$threads" || return 0
-}
-
 # colmap_run WS IMAGES MODE TRUTH MAX_IMAGE_SIZE
 colmap_run() {
   local ws="$1" images="$2" mode="$3" truth="$4" max_size="$5"
@@ -96,29 +63,12 @@ print('%r,%r,%r,0' % (1.05 * ($fx + $fy) / 2, $width / 2, $height / 2))")") ;;
   return 0
 }
 
-# judge WS TRUTH LABEL: evaluation.json and the model's cameras as text.
-judge() {
-  local ws="$1" truth="$2" label="$3"
-  [ -d "$ws/model" ] || return 0
-  "$BAYON" evaluate --input_path "$ws/model" --ground_truth_path "$truth" \
-    --output_path "$ws/evaluation.json" --label "$label" \
-    >"$ws/evaluate.log" 2>&1 || true
-  mkdir -p "$ws/model_txt"
-  colmap model_converter --input_path "$ws/model" --output_path "$ws/model_txt" \
-    --output_type TXT >/dev/null 2>&1 || true
-}
-
 # one SET IMAGES FORMAT TRUTH_INPUT MAX_IMAGE_SIZE BAYON_MATCH_ARGS...
 one() {
   local set="$1" images="$2" format="$3" truth_input="$4" max_size="$5"
   shift 5
   local truth="$dir/$set/truth"
-  rm -rf "$dir/$set"
-  mkdir -p "$dir/$set"
-  local image_path_flag=()
-  [ "$format" = strecha ] && image_path_flag=(--image_path "$images")
-  "$BAYON" import_ground_truth --format "$format" --input_path "$truth_input" \
-    --output_path "$truth" "${image_path_flag[@]}" >"$dir/$set/truth.log" 2>&1
+  fresh_truth "$dir/$set" "$images" "$format" "$truth_input"
   for mode in "${modes[@]}"; do
     local ws="$dir/$set/$mode"
     mkdir -p "$ws/bayon" "$ws/colmap"
