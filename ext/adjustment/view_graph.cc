@@ -2,6 +2,7 @@
 #include "ext/adjustment/view_graph.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/rigid3.h"
 #include "ext/core/statistics.h"
 
 #include <algorithm>
@@ -23,8 +24,9 @@ void ViewGraphOptions::Check() const {
 }
 
 double RotationAngleDeg(const Eigen::Matrix3d& rotation) {
-  const double cosine = std::clamp((rotation.trace() - 1) / 2, -1.0, 1.0);
-  return std::acos(cosine) * 180.0 / M_PI;
+  return RotationAngleBetween(Eigen::Quaterniond(rotation),
+                              Eigen::Quaterniond::Identity()) *
+         180.0 / M_PI;
 }
 
 namespace {

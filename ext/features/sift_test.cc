@@ -47,12 +47,6 @@ Eigen::Vector2d Warp(const cv::Mat& affine, const Eigen::Vector2d& xy) {
           affine.at<double>(1, 2) + 0.5);
 }
 
-std::vector<int> AllRows(int n) {
-  std::vector<int> rows(n);
-  for (int i = 0; i < n; ++i) rows[i] = i;
-  return rows;
-}
-
 TEST(Sift, FindsAndMatchesTheSamePointsUnderRotationAndScale) {
   const cv::Mat image1 = Blobs(480, 360, 3);
   // Turned by 35 deg and reduced to 0.7 about the centre.
@@ -83,10 +77,8 @@ TEST(Sift, FindsAndMatchesTheSamePointsUnderRotationAndScale) {
   }
 
   const std::vector<DescriptorMatch> matches =
-      MatchDescriptors(features1.descriptors,
-                       AllRows(features1.descriptors.rows()),
-                       features2.descriptors,
-                       AllRows(features2.descriptors.rows()),
+      MatchDescriptors(ToUnitDescriptors(features1.descriptors),
+                       ToUnitDescriptors(features2.descriptors),
                        DescriptorMatchingOptions());
   ASSERT_GT(matches.size(), 100u);
   int num_correct = 0;
@@ -151,10 +143,8 @@ TEST(Sift, UprightDescriptorsOfGivenPointsFollowTheImage) {
       ComputeUprightSiftDescriptors(image2, xy2, options);
   ASSERT_EQ(d1.rows(), static_cast<int>(xy1.size()));
   const std::vector<DescriptorMatch> matches =
-      MatchDescriptors(d1,
-                       AllRows(d1.rows()),
-                       d2,
-                       AllRows(d2.rows()),
+      MatchDescriptors(ToUnitDescriptors(d1),
+                       ToUnitDescriptors(d2),
                        DescriptorMatchingOptions());
   int num_right = 0;
   for (const DescriptorMatch& match : matches) {

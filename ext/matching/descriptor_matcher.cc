@@ -25,24 +25,27 @@ void DescriptorMatchingOptions::Check() const {
 
 namespace {
 
-using DescriptorMatrix =
-    Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-// The chosen rows as unit vectors (COLMAP's scale is 512 for unit norm).
-DescriptorMatrix UnitRows(const FeatureDescriptors& descriptors,
-                          const std::vector<int>& rows) {
-  DescriptorMatrix unit(rows.size(), 128);
-  for (size_t i = 0; i < rows.size(); ++i) {
-    unit.row(i) = descriptors.row(rows[i]).cast<float>() / 512.f;
-  }
-  return unit;
-}
-
 double Angle(float dot) {
   return std::acos(std::clamp(static_cast<double>(dot), -1.0, 1.0));
 }
 
 }  // namespace
+
+UnitDescriptors ToUnitDescriptors(const FeatureDescriptors& descriptors) {
+  CHECK_EQ(descriptors.cols(), 128);
+  // COLMAP's scale: 512 for unit norm.
+  return descriptors.cast<float>() / 512.f;
+}
+
+UnitDescriptors ToUnitDescriptors(const FeatureDescriptors& descriptors,
+                                  const std::vector<int>& rows) {
+  CHECK_EQ(descriptors.cols(), 128);
+  UnitDescriptors unit(rows.size(), 128);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    unit.row(i) = descriptors.row(rows[i]).cast<float>() / 512.f;
+  }
+  return unit;
+}
 
 std::vector<DescriptorMatch> MatchDescriptors(
     const FeatureDescriptors& descriptors1,
@@ -50,15 +53,26 @@ std::vector<DescriptorMatch> MatchDescriptors(
     const FeatureDescriptors& descriptors2,
     const std::vector<int>& rows2,
     const DescriptorMatchingOptions& options) {
+  std::vector<DescriptorMatch> matches =
+      MatchDescriptors(ToUnitDescriptors(descriptors1, rows1),
+                       ToUnitDescriptors(descriptors2, rows2),
+                       options);
+  for (DescriptorMatch& match : matches) {
+    match.idx1 = rows1[match.idx1];
+    match.idx2 = rows2[match.idx2];
+  }
+  return matches;
+}
+
+std::vector<DescriptorMatch> MatchDescriptors(
+    const UnitDescriptors& unit1,
+    const UnitDescriptors& unit2,
+    const DescriptorMatchingOptions& options) {
   options.Check();
   std::vector<DescriptorMatch> matches;
-  if (rows1.empty() || rows2.empty()) return matches;
-  CHECK_EQ(descriptors1.cols(), 128);
-  CHECK_EQ(descriptors2.cols(), 128);
-  const DescriptorMatrix unit1 = UnitRows(descriptors1, rows1);
-  const DescriptorMatrix unit2 = UnitRows(descriptors2, rows2);
-  const int n1 = static_cast<int>(rows1.size());
-  const int n2 = static_cast<int>(rows2.size());
+  const int n1 = static_cast<int>(unit1.rows());
+  const int n2 = static_cast<int>(unit2.rows());
+  if (n1 == 0 || n2 == 0) return matches;
 
   // Per row of either image its nearest and second nearest row of the
   // other by dot product (the larger the nearer).
@@ -68,7 +82,7 @@ std::vector<DescriptorMatch> MatchDescriptors(
   std::vector<int> best21(n2, -1);
   std::vector<float> best_dot21(n2, kNone), second_dot21(n2, kNone);
   constexpr int kBlock = 512;
-  Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dots;
+  UnitDescriptors dots;
   for (int begin = 0; begin < n1; begin += kBlock) {
     const int size = std::min(kBlock, n1 - begin);
     dots.noalias() = unit1.middleRows(begin, size) * unit2.transpose();
@@ -116,8 +130,7 @@ std::vector<DescriptorMatch> MatchDescriptors(
         (best21[j] != i || !passes(best_dot21[j], second_dot21[j]))) {
       continue;
     }
-    matches.push_back(
-        {rows1[i], rows2[j], static_cast<float>(Angle(best_dot12[i]))});
+    matches.push_back({i, j, static_cast<float>(Angle(best_dot12[i]))});
   }
   return matches;
 }

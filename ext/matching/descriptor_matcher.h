@@ -14,6 +14,8 @@
 
 #include "ext/colmap/database.h"
 
+#include <Eigen/Core>
+
 #include <vector>
 
 namespace bayon {
@@ -31,11 +33,24 @@ struct DescriptorMatch {
   float distance = 0;  // radians
 };
 
-// Matches the descriptor rows `rows1` of `descriptors1` with the rows
-// `rows2` of `descriptors2`; indices in the result are the rows'. An
-// image-1 row appears at most once, and with cross_check an image-2 row
-// too. Cost O(|rows1| |rows2| 128), in
-// blocks so that memory stays O(|rows2|).
+// Descriptors as unit vectors, one per row: COLMAP's bytes / 512.
+using UnitDescriptors =
+    Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+UnitDescriptors ToUnitDescriptors(const FeatureDescriptors& descriptors);
+UnitDescriptors ToUnitDescriptors(const FeatureDescriptors& descriptors,
+                                  const std::vector<int>& rows);
+
+// Matches every row of `unit1` with every row of `unit2`; indices in the
+// result are the rows'. An image-1 row appears at most once, and with
+// cross_check an image-2 row too. Cost O(n1 n2 128), in blocks so that
+// memory stays O(n2).
+std::vector<DescriptorMatch> MatchDescriptors(
+    const UnitDescriptors& unit1,
+    const UnitDescriptors& unit2,
+    const DescriptorMatchingOptions& options);
+
+// The same for the descriptor rows `rows1` of `descriptors1` and `rows2` of
+// `descriptors2`, with those rows' indices in the result.
 std::vector<DescriptorMatch> MatchDescriptors(
     const FeatureDescriptors& descriptors1,
     const std::vector<int>& rows1,

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <numeric>
 #include <random>
 
 namespace bayon {
@@ -34,12 +35,6 @@ Eigen::VectorXd Perturbed(const Eigen::VectorXd& v,
   return w.normalized();
 }
 
-std::vector<int> AllRows(int n) {
-  std::vector<int> rows(n);
-  for (int i = 0; i < n; ++i) rows[i] = i;
-  return rows;
-}
-
 TEST(DescriptorMatcher, FindsConjugatesAmongDistractors) {
   std::mt19937 rng(4);
   const int n = 300;
@@ -51,16 +46,20 @@ TEST(DescriptorMatcher, FindsConjugatesAmongDistractors) {
     SetRow(&d2, n - 1 - i, Perturbed(v, 0.02, &rng));
   }
   for (int j = n; j < n + 200; ++j) SetRow(&d2, j, RandomDescriptor(&rng));
-  const std::vector<DescriptorMatch> matches = MatchDescriptors(
-      d1, AllRows(n), d2, AllRows(n + 200), DescriptorMatchingOptions());
+  const std::vector<DescriptorMatch> matches =
+      MatchDescriptors(ToUnitDescriptors(d1),
+                       ToUnitDescriptors(d2),
+                       DescriptorMatchingOptions());
   ASSERT_GT(matches.size(), 0.95 * n);
   for (const DescriptorMatch& match : matches) {
     EXPECT_EQ(match.idx2, n - 1 - match.idx1);
     EXPECT_LT(match.distance, 0.7);
   }
   // Only the rows asked for, and their indices.
-  const std::vector<DescriptorMatch> some = MatchDescriptors(
-      d1, {5, 6, 7}, d2, AllRows(n + 200), DescriptorMatchingOptions());
+  std::vector<int> rows2(n + 200);
+  std::iota(rows2.begin(), rows2.end(), 0);
+  const std::vector<DescriptorMatch> some =
+      MatchDescriptors(d1, {5, 6, 7}, d2, rows2, DescriptorMatchingOptions());
   ASSERT_EQ(some.size(), 3u);
   EXPECT_EQ(some[0].idx1, 5);
   EXPECT_EQ(some[0].idx2, n - 6);

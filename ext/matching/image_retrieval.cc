@@ -37,9 +37,6 @@ void RetrievalOptions::Check() const {
 
 namespace {
 
-using RowMatrix =
-    Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
 // A photograph's SIFT descriptors at the reduced size.
 FeatureDescriptors Describe(const std::string& file,
                             const RetrievalOptions& options) {
@@ -49,16 +46,12 @@ FeatureDescriptors Describe(const std::string& file,
   return DetectSiftFeatures(ReadImageGrayFloat(file), sift).descriptors;
 }
 
-RowMatrix UnitRows(const FeatureDescriptors& descriptors) {
-  return descriptors.cast<float>() / 512.f;
-}
-
 // k-means centres (k x 128) of every `stride`-th descriptor of each
 // photograph, k-means++ started from OpenCV's generator at a fixed seed.
 // The samples are sorted first, so that neither the run nor the order of
 // the photographs changes the vocabulary.
-RowMatrix LearnVocabulary(const std::vector<FeatureDescriptors>& descriptors,
-                          int k) {
+UnitDescriptors LearnVocabulary(
+    const std::vector<FeatureDescriptors>& descriptors, int k) {
   int total = 0;
   for (const FeatureDescriptors& d : descriptors) {
     total += static_cast<int>(d.rows());
@@ -72,12 +65,13 @@ RowMatrix LearnVocabulary(const std::vector<FeatureDescriptors>& descriptors,
     }
   }
   std::sort(rows.begin(), rows.end());
-  cv::Mat samples(static_cast<int>(rows.size()), 128, CV_32F);
-  for (int r = 0; r < samples.rows; ++r) {
-    for (int c = 0; c < 128; ++c) {
-      samples.at<float>(r, c) = rows[r][c] / 512.f;
-    }
+  FeatureDescriptors sorted(rows.size(), 128);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    std::copy(rows[r].begin(), rows[r].end(), sorted.row(r).data());
   }
+  UnitDescriptors unit = ToUnitDescriptors(sorted);
+  const cv::Mat samples(
+      static_cast<int>(unit.rows()), 128, CV_32F, unit.data());
   k = std::min(k, std::max(2, samples.rows / 20));
   cv::theRNG().state = 0x5eed;
   cv::Mat labels, centers;
@@ -89,22 +83,19 @@ RowMatrix LearnVocabulary(const std::vector<FeatureDescriptors>& descriptors,
              1,
              cv::KMEANS_PP_CENTERS,
              centers);
-  RowMatrix vocabulary(centers.rows, 128);
-  for (int r = 0; r < centers.rows; ++r) {
-    for (int c = 0; c < 128; ++c) vocabulary(r, c) = centers.at<float>(r, c);
-  }
-  return vocabulary;
+  return Eigen::Map<const UnitDescriptors>(
+      centers.ptr<float>(), centers.rows, 128);
 }
 
 // Word counts: each descriptor's nearest centre,
 // argmax_c (d . c - |c|^2 / 2).
-Eigen::VectorXd CountWords(const RowMatrix& descriptors,
-                           const RowMatrix& vocabulary) {
+Eigen::VectorXd CountWords(const UnitDescriptors& descriptors,
+                           const UnitDescriptors& vocabulary) {
   Eigen::VectorXd counts = Eigen::VectorXd::Zero(vocabulary.rows());
   if (descriptors.rows() == 0) return counts;
   const Eigen::VectorXf half_norms =
       0.5f * vocabulary.rowwise().squaredNorm().transpose();
-  const RowMatrix scores = descriptors * vocabulary.transpose();
+  const UnitDescriptors scores = descriptors * vocabulary.transpose();
   for (int i = 0; i < scores.rows(); ++i) {
     Eigen::Index word = 0;
     (scores.row(i) - half_norms.transpose()).maxCoeff(&word);
@@ -114,16 +105,19 @@ Eigen::VectorXd CountWords(const RowMatrix& descriptors,
 }
 
 // The cosines of the photographs' tf-idf weighted word histograms.
+// (The bytes give the vocabulary's sample its order; `unit` are the same
+// descriptors as unit vectors.)
 Eigen::MatrixXd WordSimilarities(
     const std::vector<FeatureDescriptors>& descriptors,
+    const std::vector<UnitDescriptors>& unit,
     const RetrievalOptions& options) {
   const int n = static_cast<int>(descriptors.size());
-  const RowMatrix vocabulary =
+  const UnitDescriptors vocabulary =
       LearnVocabulary(descriptors, options.vocabulary_size);
   const int k = static_cast<int>(vocabulary.rows());
   Eigen::MatrixXd histograms(k, n);
   for (int i = 0; i < n; ++i) {
-    histograms.col(i) = CountWords(UnitRows(descriptors[i]), vocabulary);
+    histograms.col(i) = CountWords(unit[i], vocabulary);
   }
   // tf-idf: term frequency times log(n / photographs with the word).
   for (int w = 0; w < k; ++w) {
@@ -140,15 +134,29 @@ Eigen::MatrixXd WordSimilarities(
 
 }  // namespace
 
+std::vector<int> MostSimilar(const Eigen::MatrixXd& similarity, int i, int k) {
+  std::vector<int> others;
+  for (int j = 0; j < similarity.cols(); ++j) {
+    if (j != i) others.push_back(j);
+  }
+  std::stable_sort(others.begin(), others.end(), [&](int a, int b) {
+    return similarity(i, a) > similarity(i, b);
+  });
+  others.resize(std::min<size_t>(others.size(), std::max(k, 0)));
+  return others;
+}
+
 Eigen::MatrixXd ImageSimilarities(const std::vector<std::string>& image_files,
                                   const RetrievalOptions& options) {
   options.Check();
   const int n = static_cast<int>(image_files.size());
   std::vector<FeatureDescriptors> descriptors(n);
+  std::vector<UnitDescriptors> unit(n);
   {
     Progress progress("Describing photographs for retrieval", n, "images");
     ParallelFor(n, options.num_threads, [&](int i) {
       descriptors[i] = Describe(image_files[i], options);
+      unit[i] = ToUnitDescriptors(descriptors[i]);
       progress.Add();
     });
     progress.Finish();
@@ -156,49 +164,32 @@ Eigen::MatrixXd ImageSimilarities(const std::vector<std::string>& image_files,
   Eigen::MatrixXd similarity = Eigen::MatrixXd::Identity(n, n);
   if (n < 2) return similarity;
   // Words only where they have something to leave out.
-  const Eigen::MatrixXd words = n - 1 > options.shortlist_size
-                                    ? WordSimilarities(descriptors, options)
-                                    : Eigen::MatrixXd::Ones(n, n);
+  const Eigen::MatrixXd words =
+      n - 1 > options.shortlist_size
+          ? WordSimilarities(descriptors, unit, options)
+          : Eigen::MatrixXd::Ones(n, n);
 
   // The shortlist: for each photograph its most alike by words.
   std::set<std::pair<int, int>> shortlist;
   for (int i = 0; i < n; ++i) {
-    std::vector<int> others;
-    for (int j = 0; j < n; ++j) {
-      if (j != i) others.push_back(j);
+    for (int j : MostSimilar(words, i, options.shortlist_size)) {
+      shortlist.insert({std::min(i, j), std::max(i, j)});
     }
-    std::stable_sort(others.begin(), others.end(), [&](int a, int b) {
-      return words(i, a) > words(i, b);
-    });
-    others.resize(std::min<size_t>(others.size(), options.shortlist_size));
-    for (int j : others) shortlist.insert({std::min(i, j), std::max(i, j)});
   }
   const std::vector<std::pair<int, int>> pairs(shortlist.begin(),
                                                shortlist.end());
-  std::vector<int> all_rows(options.max_num_features);
-  for (int i = 0; i < options.max_num_features; ++i) all_rows[i] = i;
-  const auto rows_of = [&](int image) {
-    return std::vector<int>(all_rows.begin(),
-                            all_rows.begin() + descriptors[image].rows());
-  };
   Progress progress("Matching shortlisted photographs", pairs.size(), "pairs");
   std::vector<double> shares(pairs.size(), 0.0);
   ParallelFor(pairs.size(), options.num_threads, [&](int k) {
     const auto [i, j] = pairs[k];
-    const size_t matched = MatchDescriptors(descriptors[i],
-                                            rows_of(i),
-                                            descriptors[j],
-                                            rows_of(j),
-                                            DescriptorMatchingOptions())
-                               .size();
-    const double fewer = static_cast<double>(
-        std::min(descriptors[i].rows(), descriptors[j].rows()));
+    const size_t matched =
+        MatchDescriptors(unit[i], unit[j], DescriptorMatchingOptions()).size();
+    const double fewer =
+        static_cast<double>(std::min(unit[i].rows(), unit[j].rows()));
     shares[k] = fewer > 0 ? matched / fewer : 0.0;
     progress.Add();
   });
   progress.Finish();
-  similarity.setZero();
-  similarity.diagonal().setOnes();
   for (size_t k = 0; k < pairs.size(); ++k) {
     const auto [i, j] = pairs[k];
     similarity(i, j) = similarity(j, i) = shares[k];

@@ -35,6 +35,10 @@ struct RetrievalOptions {
   void Check() const;           // throws InputError naming field, value, rule
 };
 
+// The columns j != i of row i of `similarity`, the k largest, largest
+// first; ties in column order.
+std::vector<int> MostSimilar(const Eigen::MatrixXd& similarity, int i, int k);
+
 // N x N similarities of the photographs (symmetric, in [0, 1], 1 on the
 // diagonal), in the order given; with N <= shortlist_size + 1 every pair is
 // matched, and the result does not depend on the order. Throws InputError

@@ -49,13 +49,10 @@ namespace {
 struct ImageData {
   DatabaseImage image;
   std::string path;
-  int num_keypoints = 0;
-  // Of the images a pair needs, once they are read: the keypoints, which
-  // rows are matched by correlation (their windows in `patches`) and which
-  // by descriptor.
   FeatureKeypoints keypoints;
+  // Of the images a pair needs: which keypoint rows are matched by
+  // correlation (their windows in `patches`) and which by descriptor.
   std::vector<uint8_t> by_correlation;
-  int num_correlation = 0;
   FeatureDescriptors descriptors;  // empty, or a row per keypoint
   std::vector<int> descriptor_rows;
   std::unique_ptr<ImagePatches> patches;
@@ -69,7 +66,6 @@ struct ImageData {
 // correlation.
 void ClassifyKeypoints(Database* database, ImageData* entry) {
   const image_t image_id = entry->image.image_id;
-  entry->keypoints = database->ReadKeypoints(image_id);
   const int n = static_cast<int>(entry->keypoints.rows());
   if (database->ExistsDescriptors(image_id)) {
     FeatureDescriptors descriptors = database->ReadDescriptors(image_id);
@@ -88,7 +84,6 @@ void ClassifyKeypoints(Database* database, ImageData* entry) {
         has_interest ? std::isfinite(record->interest[i]) : !has_descriptors;
     if (correlate) {
       entry->by_correlation[i] = 1;
-      ++entry->num_correlation;
     } else if (has_descriptors) {
       entry->descriptor_rows.push_back(i);
     }
@@ -110,10 +105,9 @@ std::map<image_t, ImageData> ReadImageList(Database* database,
     entry.image = image;
     entry.path = (fs::path(image_path) / image.name).string();
     if (database->ExistsKeypoints(image.image_id)) {
-      entry.num_keypoints =
-          static_cast<int>(database->ReadKeypoints(image.image_id).rows());
+      entry.keypoints = database->ReadKeypoints(image.image_id);
     }
-    num_with_keypoints += entry.num_keypoints > 0;
+    num_with_keypoints += entry.keypoints.rows() > 0;
   }
   if (num_with_keypoints == 0) {
     ThrowInputError(database->path(),
@@ -357,8 +351,8 @@ MatchingSummary MatchImages(const std::string& database_path,
     report.image_id2 = id2;
     report.name1 = data.at(id1).image.name;
     report.name2 = data.at(id2).image.name;
-    report.num_points1 = data.at(id1).num_keypoints;
-    report.num_points2 = data.at(id2).num_keypoints;
+    report.num_points1 = static_cast<int>(data.at(id1).keypoints.rows());
+    report.num_points2 = static_cast<int>(data.at(id2).keypoints.rows());
     if (!options.overwrite && database.ExistsMatches(id1, id2)) {
       report.skipped = true;
       report.reason = "has matches (--overwrite 1 replaces them)";
@@ -389,7 +383,10 @@ MatchingSummary MatchImages(const std::string& database_path,
         xy[i] = KeypointXY(entry.keypoints, i);
       }
       entry.patches = std::make_unique<ImagePatches>();
-      if (entry.num_correlation > 0) {
+      const bool correlates =
+          std::count(
+              entry.by_correlation.begin(), entry.by_correlation.end(), 1) > 0;
+      if (correlates) {
         cv::Mat gray = ReadImageGrayFloat(entry.path);
         *entry.patches = ExtractImagePatches(gray, xy, options.patches);
         if (options.lsm_refinement) entry.gray = std::move(gray);

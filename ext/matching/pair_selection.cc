@@ -3,6 +3,7 @@
 
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/matching/image_retrieval.h"
 
 #include <glog/logging.h>
 
@@ -109,7 +110,8 @@ std::vector<std::pair<image_t, image_t>> ReadPairList(
   return pairs;
 }
 
-// Each image (in name order) with its k most similar others.
+// Each image (in name order) with its k most similar others; ties go to
+// the earlier name.
 std::vector<std::pair<image_t, image_t>> MostSimilarPairs(
     const std::vector<DatabaseImage>& images,
     const std::vector<DatabaseImage>& sorted,
@@ -120,20 +122,18 @@ std::vector<std::pair<image_t, image_t>> MostSimilarPairs(
     index[images[i].image_id] = static_cast<int>(i);
   }
   const int n = static_cast<int>(sorted.size());
+  Eigen::MatrixXd by_name(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      by_name(i, j) = similarity(index.at(sorted[i].image_id),
+                                 index.at(sorted[j].image_id));
+    }
+  }
   std::vector<std::pair<image_t, image_t>> pairs;
   for (int i = 0; i < n; ++i) {
-    std::vector<int> others;
-    for (int j = 0; j < n; ++j) {
-      if (j != i) others.push_back(j);
-    }
-    const int a = index.at(sorted[i].image_id);
-    std::stable_sort(others.begin(), others.end(), [&](int x, int y) {
-      return similarity(a, index.at(sorted[x].image_id)) >
-             similarity(a, index.at(sorted[y].image_id));
-    });
-    others.resize(std::min<size_t>(others.size(), k));
-    for (int j : others)
+    for (int j : MostSimilar(by_name, i, k)) {
       pairs.emplace_back(sorted[i].image_id, sorted[j].image_id);
+    }
   }
   return pairs;
 }
