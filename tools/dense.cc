@@ -112,7 +112,11 @@ int RunDense(int argc, char** argv) {
                  "multiview: every n-th pixel of the window");
   app.add_option("--patch_match_iterations",
                  options.patch_match.num_iterations,
-                 "multiview: red-black propagation iterations");
+                 "multiview: red-black propagation iterations per level");
+  app.add_option("--patch_match_levels",
+                 options.patch_match.num_levels,
+                 "multiview: coarse-to-fine levels of halved size (1: the "
+                 "working size alone), each level's planes starting the next");
   app.add_option("--patch_match_candidates",
                  options.patch_match.num_propagation_candidates,
                  "multiview: neighbours' planes scored per pixel (the "

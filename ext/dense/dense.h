@@ -9,8 +9,8 @@
 //    depth range) at the smallest angle between the rays that is still
 //    min_triangulation_angle_deg (on a ring: the neighbours on both sides).
 // 2. Per master, a depth and a normal for every pixel of the photograph
-//    shrunk to max_image_size (patch_match.h), streamed: each photograph is
-//    read once and kept at the working size only.
+//    shrunk to max_image_size (patch_match.h), coarse to fine, streamed:
+//    each photograph is read once and kept at the working size only.
 // 3. The depth maps fused (fusion.h): a pixel whose depth and normal enough
 //    other masters confirm becomes one point with them.
 // 4. MPGC at full resolution for every fused point, from its position and

@@ -303,7 +303,9 @@ PointCloud DenseReconstructMultiView(
   }
   if (options.refine) {
     // A fused point was confirmed by min_consistent_views other masters;
-    // MPGC keeps it with as many search images.
+    // MPGC keeps it with as many search images. (One search image instead:
+    // on the rendered tower completeness 74.1 -> 76.7 %, but the cloud's
+    // RMS 1.03 -> 1.12 GSD and its graph-cut mesh's 1.44 -> 1.51.)
     MpgcOptions mpgc = options.mpgc;
     mpgc.min_search_views = std::max(1, options.fusion.min_consistent_views);
     mpgc.lsm.min_template_stddev = options.refine_min_template_stddev;

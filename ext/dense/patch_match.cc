@@ -20,6 +20,7 @@ void PatchMatchOptions::Check() const {
               "in [1, --window_radius]",
               window_step);
   CheckOption(num_iterations >= 1, "--num_iterations", ">= 1", num_iterations);
+  CheckOption(num_levels >= 1, "--patch_match_levels", ">= 1", num_levels);
   CheckOption(best_views >= 1, "--best_views", ">= 1", best_views);
   CheckOption(
       num_propagation_candidates >= 1 && num_propagation_candidates <= 8,
@@ -237,8 +238,10 @@ class Matcher {
   Window NewWindow() const { return window_template_; }
   int border() const { return border_; }
 
-  Eigen::Vector3f Ray(int x, int y) const {
-    return K_inv_ * Eigen::Vector3f(x + 0.5f, y + 0.5f, 1.0f);
+  Eigen::Vector3f Ray(int x, int y) const { return RayAt(x + 0.5f, y + 0.5f); }
+  // The ray through the continuous pixel position (u, v).
+  Eigen::Vector3f RayAt(float u, float v) const {
+    return K_inv_ * Eigen::Vector3f(u, v, 1.0f);
   }
 
   // The mean cost over the best views of the plane through the point at
@@ -320,31 +323,58 @@ class Matcher {
 constexpr std::array<std::array<int, 2>, 8> kNeighbours = {
     {{-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-5, 0}, {5, 0}, {0, -5}, {0, 5}}};
 
-}  // namespace
+// The plane of `coarse` (the depth map of the same camera at half the
+// size) at the coarse pixel that holds pixel (x, y), as a depth on (x, y)'s
+// ray; false where the coarse map has none there.
+bool PlaneFromCoarse(const DepthMap& coarse,
+                     const Matcher& matcher,
+                     int x,
+                     int y,
+                     float* depth,
+                     Eigen::Vector3f* normal) {
+  const int cx = std::min(x / 2, coarse.width - 1);
+  const int cy = std::min(y / 2, coarse.height - 1);
+  const size_t c = coarse.index(cx, cy);
+  if (!(coarse.depth[c] > 0) || coarse.cost[c] >= kInvalidCost) return false;
+  // The coarse pixel's ray in this level's pixels: its centre
+  // ((cx + 0.5) * 2, (cy + 0.5) * 2), a ray the same in the camera frame.
+  const Eigen::Vector3f coarse_ray =
+      matcher.RayAt(2.0f * cx + 1.0f, 2.0f * cy + 1.0f);
+  const Eigen::Vector3f ray = matcher.Ray(x, y);
+  const Eigen::Vector3f& n = coarse.normal[c];
+  const float along = n.dot(ray);
+  if (along >= 0) return false;
+  *depth = coarse.depth[c] * n.dot(coarse_ray) / along;
+  *normal = n;
+  return *depth >= matcher.min_depth() && *depth <= matcher.max_depth();
+}
 
-DepthMap EstimateDepthMap(const PinholeView& master,
-                          const std::vector<const PinholeView*>& sources,
-                          double min_depth,
-                          double max_depth,
-                          const std::vector<DepthSeed>& seeds,
-                          const PatchMatchOptions& options,
-                          int num_threads) {
-  options.Check();
-  for (const PinholeView* view : sources) {
-    if (view->gray.type() != CV_32F || master.gray.type() != CV_32F) {
-      ThrowInputError("depth maps need grey values as 32-bit floats");
-    }
-  }
-  if (sources.empty() || sources.size() > kMaxSources) {
-    ThrowInputError("a depth map needs 1 to ",
-                    kMaxSources,
-                    " source views; given ",
-                    sources.size());
-  }
-  if (!(min_depth > 0 && max_depth > min_depth)) {
-    ThrowInputError(
-        "depth range [", min_depth, ", ", max_depth, "] is not positive");
-  }
+// A view at half the size: grey values averaged over 2 x 2 pixels (an odd
+// last row or column dropped), the pixel coordinates halved (pixel (i, j)
+// covers [i, i+1) x [j, j+1)).
+PinholeView HalfView(const PinholeView& view) {
+  PinholeView half;
+  const cv::Rect even(0, 0, view.width() / 2 * 2, view.height() / 2 * 2);
+  cv::resize(view.gray(even),
+             half.gray,
+             cv::Size(view.width() / 2, view.height() / 2),
+             0,
+             0,
+             cv::INTER_AREA);
+  half.K = view.K;
+  half.K.topRows<2>() *= 0.5;
+  half.cam_from_world = view.cam_from_world;
+  return half;
+}
+
+DepthMap EstimateLevel(const PinholeView& master,
+                       const std::vector<const PinholeView*>& sources,
+                       double min_depth,
+                       double max_depth,
+                       const std::vector<DepthSeed>& seeds,
+                       const DepthMap* coarse,
+                       const PatchMatchOptions& options,
+                       int num_threads) {
   const Matcher matcher(master, sources, min_depth, max_depth, options);
   DepthMap map;
   map.width = master.width();
@@ -358,8 +388,9 @@ DepthMap EstimateDepthMap(const PinholeView& master,
   if (x_end <= border || y_end <= border) return map;
   const float min_texture = static_cast<float>(options.min_texture);
 
-  // Start: a random plane everywhere there is texture; a sparse point's
-  // depth, facing the master, where one lies.
+  // Start: a random plane everywhere there is texture, or the coarse
+  // level's plane where that matches better; a sparse point's depth,
+  // facing the master, where one lies.
   std::vector<uint8_t> textured(num_pixels, 0);
   ParallelFor(y_end - border, num_threads, [&](int row) {
     const int y = border + row;
@@ -374,6 +405,17 @@ DepthMap EstimateDepthMap(const PinholeView& master,
       map.depth[i] = matcher.RandomDepth(&random);
       map.normal[i] = matcher.PerturbedNormal(facing, 1.0f, &random, ray);
       map.cost[i] = matcher.Cost(x, y, map.depth[i], map.normal[i], window);
+      float depth;
+      Eigen::Vector3f normal;
+      if (coarse != nullptr &&
+          PlaneFromCoarse(*coarse, matcher, x, y, &depth, &normal)) {
+        const float cost = matcher.Cost(x, y, depth, normal, window);
+        if (cost < map.cost[i]) {
+          map.depth[i] = depth;
+          map.normal[i] = normal;
+          map.cost[i] = cost;
+        }
+      }
     }
   });
   {
@@ -470,6 +512,79 @@ DepthMap EstimateDepthMap(const PinholeView& master,
     }
   }
   return map;
+}
+
+}  // namespace
+
+DepthMap EstimateDepthMap(const PinholeView& master,
+                          const std::vector<const PinholeView*>& sources,
+                          double min_depth,
+                          double max_depth,
+                          const std::vector<DepthSeed>& seeds,
+                          const PatchMatchOptions& options,
+                          int num_threads) {
+  options.Check();
+  for (const PinholeView* view : sources) {
+    if (view->gray.type() != CV_32F || master.gray.type() != CV_32F) {
+      ThrowInputError("depth maps need grey values as 32-bit floats");
+    }
+  }
+  if (sources.empty() || sources.size() > kMaxSources) {
+    ThrowInputError("a depth map needs 1 to ",
+                    kMaxSources,
+                    " source views; given ",
+                    sources.size());
+  }
+  if (!(min_depth > 0 && max_depth > min_depth)) {
+    ThrowInputError(
+        "depth range [", min_depth, ", ", max_depth, "] is not positive");
+  }
+  // Coarse to fine: the planes found at half the size start this level.
+  // Propagation carries a plane a few pixels per sweep, so a surface that
+  // random planes hit only here and there is covered in few sweeps at the
+  // coarse level, where the same window also spans twice the surface (more
+  // texture where it is weak); the fine level then mostly refines.
+  const int min_size = 8 * (2 * options.window_radius + 1);
+  if (options.num_levels <= 1 ||
+      std::min(master.width(), master.height()) / 2 < min_size) {
+    return EstimateLevel(master,
+                         sources,
+                         min_depth,
+                         max_depth,
+                         seeds,
+                         nullptr,
+                         options,
+                         num_threads);
+  }
+  const PinholeView half_master = HalfView(master);
+  std::vector<PinholeView> half_sources;
+  half_sources.reserve(sources.size());
+  for (const PinholeView* view : sources) {
+    half_sources.push_back(HalfView(*view));
+  }
+  std::vector<const PinholeView*> half_source_ptrs;
+  for (const PinholeView& view : half_sources) {
+    half_source_ptrs.push_back(&view);
+  }
+  std::vector<DepthSeed> half_seeds = seeds;
+  for (DepthSeed& seed : half_seeds) seed.xy *= 0.5;
+  PatchMatchOptions coarse_options = options;
+  --coarse_options.num_levels;
+  const DepthMap coarse = EstimateDepthMap(half_master,
+                                           half_source_ptrs,
+                                           min_depth,
+                                           max_depth,
+                                           half_seeds,
+                                           coarse_options,
+                                           num_threads);
+  return EstimateLevel(master,
+                       sources,
+                       min_depth,
+                       max_depth,
+                       seeds,
+                       &coarse,
+                       options,
+                       num_threads);
 }
 
 std::vector<float> PlaneCosts(const PinholeView& master,

@@ -9,7 +9,9 @@
 // (PinholeView): distortion and the image frame removed, so that a plane
 // maps between two images by a homography. Every pixel starts from a random
 // plane in the master's depth range (and, where a sparse point lies, from
-// that point's depth). Then, in alternate half-sweeps over the pixels of a
+// that point's depth), or from the plane found at the coarser level where
+// that matches better (num_levels: the same done first at half the size,
+// recursively). Then, in alternate half-sweeps over the pixels of a
 // checkerboard's two colours, each pixel takes the best of
 //   - the planes of eight neighbours of the other colour (at one and at
 //     five pixels along the rows and columns; of those the best-matched
@@ -63,8 +65,11 @@ struct PatchMatchOptions {
   // window_radius of the centre, working pixels.
   int window_radius = 4;
   int window_step = 2;
-  // Red-black iterations (each: both colours once).
+  // Red-black iterations (each: both colours once), at every level.
   int num_iterations = 4;
+  // Coarse to fine: levels of halved size (1: the working size alone);
+  // each level's planes start the next finer one.
+  int num_levels = 2;
   // Of the eight neighbours' planes, those of the best-matched this many
   // are scored at a pixel (ranked by their cost at their own pixels).
   int num_propagation_candidates = 4;
