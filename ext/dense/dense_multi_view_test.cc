@@ -122,19 +122,20 @@ TEST(Fusion, PixelsAtAnEdgeOfTheDepthMapAreNotFused) {
   const std::vector<const PinholeView*> views = truth.ViewPointers();
   const std::vector<const DepthMap*> maps = truth.MapPointers();
   FusionOptions options;
-  ASSERT_EQ(options.edge_margin_px, 5);
+  const int margin = options.edge_margin_px;
+  ASSERT_EQ(margin, 8);
   std::vector<std::vector<FusionVerdict>> verdicts;
   FuseDepthMaps(views, maps, options, &verdicts);
   const int y = first.height / 2;
-  for (int x = 140; x < 150; ++x) {
+  for (int x = 150 - 2 * margin; x < 150; ++x) {
     EXPECT_EQ(verdicts[0][first.index(x, y)] == FusionVerdict::kDepthEdge,
-              x >= 145)
+              x >= 150 - margin)
         << x;
   }
   for (int x = 50; x < 70; ++x) {
     EXPECT_NE(verdicts[0][first.index(x, 60)], FusionVerdict::kDepthEdge) << x;
   }
-  for (int x = 0; x < 5; ++x) {
+  for (int x = 0; x < margin; ++x) {
     EXPECT_NE(verdicts[0][first.index(x, y)], FusionVerdict::kDepthEdge) << x;
     EXPECT_NE(verdicts[0][first.index(y, x)], FusionVerdict::kDepthEdge) << x;
   }

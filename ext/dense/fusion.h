@@ -36,10 +36,15 @@ struct FusionOptions {
   // edge against an untextured background (or sky, or a hole the matching
   // left), the texture of the object decides, and background pixels next to
   // the edge take the object's depth ("edge fattening"), which meshes turn
-  // into a rim around the object. Holes narrower than two margins (a few
-  // untextured or poorly matched pixels inside a surface) are closed first
-  // and do not count as edges. 0: off.
-  int edge_margin_px = 5;
+  // into a rim around the object. Coarse to fine (PatchMatchOptions::
+  // num_levels), the half-size level's window reaches twice as far, and its
+  // planes start the working size: 8 pixels covers the default window of
+  // radius 4 at half the size (5, the working size's reach alone, left the
+  // temple's silhouette IoU at 0.840 mean, 0.762 worst; 8: 0.852, 0.778; the
+  // rendered tower 74.1 -> 73.1 % complete, RMS 1.03 -> 1.00 GSD). Holes
+  // narrower than two margins (a few untextured or poorly matched pixels
+  // inside a surface) are closed first and do not count as edges. 0: off.
+  int edge_margin_px = 8;
   void Check() const;  // throws InputError naming field, value, rule
 };
 
