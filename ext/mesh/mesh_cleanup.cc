@@ -303,6 +303,34 @@ std::vector<std::array<int, 3>> MinimumAreaTriangulation(
   return triangles;
 }
 
+// Whether OpenMesh can add the face (a, b, c) without relinking: each edge
+// free or new, and at each corner whose two edges exist already, the two
+// following each other around the vertex's boundary. Where they do not,
+// add_face must move the faces between them into another gap at the vertex,
+// and where that fails ("patch re-linking failed") it has already changed
+// part of the mesh, which then fails OpenMesh's assertions (the rendered
+// tower's graph-cut mesh with holes of up to 50 edges filled). A hole's
+// triangles are added as ears instead: each next to the boundary as it
+// stands.
+bool CanAddFace(const OmMesh& mesh,
+                const std::array<OmMesh::VertexHandle, 3>& v) {
+  if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (!mesh.is_boundary(v[k])) return false;
+    const OmMesh::HalfedgeHandle h = mesh.find_halfedge(v[k], v[(k + 1) % 3]);
+    if (h.is_valid() && !mesh.is_boundary(h)) return false;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const OmMesh::HalfedgeHandle in = mesh.find_halfedge(v[(k + 2) % 3], v[k]);
+    const OmMesh::HalfedgeHandle out = mesh.find_halfedge(v[k], v[(k + 1) % 3]);
+    if (in.is_valid() && out.is_valid() &&
+        mesh.next_halfedge_handle(in) != out) {
+      return false;
+    }
+  }
+  return true;
+}
+
 void FillHoles(int max_hole_edges, OmMesh* mesh, MeshCleanupReport* report) {
   std::vector<std::vector<OmMesh::VertexHandle>> holes;
   OpenMesh::HPropHandleT<bool> seen;
@@ -323,7 +351,13 @@ void FillHoles(int max_hole_edges, OmMesh* mesh, MeshCleanupReport* report) {
       h = mesh->next_halfedge_handle(h);
     } while (h != start &&
              loop.size() <= static_cast<size_t>(max_hole_edges) + 1);
-    if (h == start && loop.size() >= 3 &&
+    // A loop through one vertex twice (two holes that touch there) has no
+    // triangulation without that vertex in a face twice: left open.
+    std::vector<OmMesh::VertexHandle> sorted = loop;
+    std::sort(sorted.begin(), sorted.end());
+    const bool simple =
+        std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
+    if (h == start && simple && loop.size() >= 3 &&
         loop.size() <= static_cast<size_t>(max_hole_edges)) {
       holes.push_back(std::move(loop));
     } else {
@@ -342,9 +376,25 @@ void FillHoles(int max_hole_edges, OmMesh* mesh, MeshCleanupReport* report) {
     // The boundary halfedges run the loop the way a face filling the hole
     // runs its edges, so triangles in loop order are oriented like their
     // neighbours.
+    // Passes over the triangles until none more can be added: an ear of
+    // the boundary as it stands at a time.
+    std::vector<std::array<OmMesh::VertexHandle, 3>> pending;
     for (const auto& t : MinimumAreaTriangulation(corners)) {
-      if (mesh->add_face(hole[t[0]], hole[t[1]], hole[t[2]]).is_valid()) {
-        ++added;
+      pending.push_back({hole[t[0]], hole[t[1]], hole[t[2]]});
+    }
+    bool progress = true;
+    while (progress && !pending.empty()) {
+      progress = false;
+      for (size_t k = 0; k < pending.size();) {
+        const std::array<OmMesh::VertexHandle, 3>& face = pending[k];
+        if (CanAddFace(*mesh, face) &&
+            mesh->add_face(face[0], face[1], face[2]).is_valid()) {
+          ++added;
+          progress = true;
+          pending.erase(pending.begin() + static_cast<std::ptrdiff_t>(k));
+        } else {
+          ++k;
+        }
       }
     }
     if (added > 0) {

@@ -127,6 +127,30 @@ TEST(MeshCleanup, FillsSmallHolesOnly) {
   EXPECT_NEAR(t.area, 100 - 9, 1e-9);
 }
 
+TEST(MeshCleanup, FillsAHoleWholeEarByEar) {
+  // A 3 x 3 block: a loop of 12 edges, whose minimum-area triangulation
+  // is added an ear of the boundary at a time (OpenMesh never relinks), and
+  // all of its 10 triangles go in.
+  TriangleMesh mesh = Grid(10);
+  std::vector<Eigen::Vector3i> kept;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const size_t square = f / 2, i = square % 10, j = square / 10;
+    if (!(i >= 4 && i <= 6 && j >= 4 && j <= 6)) kept.push_back(mesh.faces[f]);
+  }
+  mesh.faces = kept;
+  MeshCleanupOptions options;
+  options.max_hole_edges = 12;
+  MeshCleanupReport report;
+  const TriangleMesh clean = CleanupMesh(mesh, options, &report);
+  EXPECT_EQ(report.num_holes_filled, 1u);
+  EXPECT_EQ(report.num_fill_faces, 10u);
+  const MeshTopology t = ComputeMeshTopology(clean);
+  EXPECT_TRUE(t.IsManifold());
+  EXPECT_EQ(t.num_boundary_loops, 1u);  // the border
+  EXPECT_EQ(t.num_inconsistent_edges, 0u);
+  EXPECT_NEAR(t.area, 100, 1e-9);
+}
+
 TEST(MeshIo, PlyObjOffRoundTrip) {
   const std::string dir = ::testing::TempDir() + "/bayon_mesh_io";
   std::filesystem::create_directories(dir);
