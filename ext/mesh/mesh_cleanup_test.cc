@@ -103,17 +103,26 @@ TEST(MeshCleanup, NonManifoldDegenerateAndSmallParts) {
   EXPECT_EQ(t.num_components, 1u);
 }
 
-TEST(MeshCleanup, FillsSmallHolesOnly) {
-  TriangleMesh mesh = Grid(10);
-  // Two holes: one square (2 faces) and a 3 x 3 block (18 faces).
+// Grid(n) without the squares (i, j) for which `cut` is true.
+template <typename Cut>
+TriangleMesh GridWithHoles(int n, Cut cut) {
+  TriangleMesh mesh = Grid(n);
   std::vector<Eigen::Vector3i> kept;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const size_t square = f / 2, i = square % 10, j = square / 10;
-    const bool small_hole = i == 2 && j == 2;
-    const bool large_hole = i >= 5 && i <= 7 && j >= 5 && j <= 7;
-    if (!small_hole && !large_hole) kept.push_back(mesh.faces[f]);
+    const int square = static_cast<int>(f / 2);
+    if (!cut(square % n, square / n)) kept.push_back(mesh.faces[f]);
   }
   mesh.faces = kept;
+  return mesh;
+}
+
+TEST(MeshCleanup, FillsSmallHolesOnly) {
+  // Two holes: one square (2 faces) and a 3 x 3 block (18 faces).
+  const TriangleMesh mesh = GridWithHoles(10, [](int i, int j) {
+    const bool small_hole = i == 2 && j == 2;
+    const bool large_hole = i >= 5 && i <= 7 && j >= 5 && j <= 7;
+    return small_hole || large_hole;
+  });
   EXPECT_EQ(ComputeMeshTopology(mesh).num_boundary_loops, 3u);
   MeshCleanupOptions options;
   options.max_hole_edges = 6;
@@ -131,13 +140,8 @@ TEST(MeshCleanup, FillsAHoleWholeEarByEar) {
   // A 3 x 3 block: a loop of 12 edges, whose minimum-area triangulation
   // is added an ear of the boundary at a time (OpenMesh never relinks), and
   // all of its 10 triangles go in.
-  TriangleMesh mesh = Grid(10);
-  std::vector<Eigen::Vector3i> kept;
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const size_t square = f / 2, i = square % 10, j = square / 10;
-    if (!(i >= 4 && i <= 6 && j >= 4 && j <= 6)) kept.push_back(mesh.faces[f]);
-  }
-  mesh.faces = kept;
+  const TriangleMesh mesh = GridWithHoles(
+      10, [](int i, int j) { return i >= 4 && i <= 6 && j >= 4 && j <= 6; });
   MeshCleanupOptions options;
   options.max_hole_edges = 12;
   MeshCleanupReport report;
