@@ -325,11 +325,12 @@ constexpr std::array<std::array<int, 2>, 8> kNeighbours = {
 
 // The plane of `coarse` (the depth map of the same camera at half the
 // size) at the coarse pixel that holds pixel (x, y), as a depth on (x, y)'s
-// ray; false where the coarse map has none there.
+// `ray`; false where the coarse map has none there.
 bool PlaneFromCoarse(const DepthMap& coarse,
                      const Matcher& matcher,
                      int x,
                      int y,
+                     const Eigen::Vector3f& ray,
                      float* depth,
                      Eigen::Vector3f* normal) {
   const int cx = std::min(x / 2, coarse.width - 1);
@@ -340,7 +341,6 @@ bool PlaneFromCoarse(const DepthMap& coarse,
   // ((cx + 0.5) * 2, (cy + 0.5) * 2), a ray the same in the camera frame.
   const Eigen::Vector3f coarse_ray =
       matcher.RayAt(2.0f * cx + 1.0f, 2.0f * cy + 1.0f);
-  const Eigen::Vector3f ray = matcher.Ray(x, y);
   const Eigen::Vector3f& n = coarse.normal[c];
   const float along = n.dot(ray);
   if (along >= 0) return false;
@@ -408,7 +408,7 @@ DepthMap EstimateLevel(const PinholeView& master,
       float depth;
       Eigen::Vector3f normal;
       if (coarse != nullptr &&
-          PlaneFromCoarse(*coarse, matcher, x, y, &depth, &normal)) {
+          PlaneFromCoarse(*coarse, matcher, x, y, ray, &depth, &normal)) {
         const float cost = matcher.Cost(x, y, depth, normal, window);
         if (cost < map.cost[i]) {
           map.depth[i] = depth;

@@ -315,16 +315,18 @@ std::vector<std::array<int, 3>> MinimumAreaTriangulation(
 bool CanAddFace(const OmMesh& mesh,
                 const std::array<OmMesh::VertexHandle, 3>& v) {
   if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) return false;
+  // edge[k]: v[k] -> v[k + 1], where it exists already.
+  std::array<OmMesh::HalfedgeHandle, 3> edge;
   for (int k = 0; k < 3; ++k) {
     if (!mesh.is_boundary(v[k])) return false;
-    const OmMesh::HalfedgeHandle h = mesh.find_halfedge(v[k], v[(k + 1) % 3]);
-    if (h.is_valid() && !mesh.is_boundary(h)) return false;
+    edge[k] = mesh.find_halfedge(v[k], v[(k + 1) % 3]);
+    if (edge[k].is_valid() && !mesh.is_boundary(edge[k])) return false;
   }
   for (int k = 0; k < 3; ++k) {
-    const OmMesh::HalfedgeHandle in = mesh.find_halfedge(v[(k + 2) % 3], v[k]);
-    const OmMesh::HalfedgeHandle out = mesh.find_halfedge(v[k], v[(k + 1) % 3]);
-    if (in.is_valid() && out.is_valid() &&
-        mesh.next_halfedge_handle(in) != out) {
+    // The corner at v[k]: from edge[k - 1] into edge[k].
+    const OmMesh::HalfedgeHandle in = edge[(k + 2) % 3];
+    if (in.is_valid() && edge[k].is_valid() &&
+        mesh.next_halfedge_handle(in) != edge[k]) {
       return false;
     }
   }
@@ -375,9 +377,8 @@ void FillHoles(int max_hole_edges, OmMesh* mesh, MeshCleanupReport* report) {
     size_t added = 0;
     // The boundary halfedges run the loop the way a face filling the hole
     // runs its edges, so triangles in loop order are oriented like their
-    // neighbours.
-    // Passes over the triangles until none more can be added: an ear of
-    // the boundary as it stands at a time.
+    // neighbours. They go in as ears of the boundary as it stands
+    // (CanAddFace), in passes until none more can be added.
     std::vector<std::array<OmMesh::VertexHandle, 3>> pending;
     for (const auto& t : MinimumAreaTriangulation(corners)) {
       pending.push_back({hole[t[0]], hole[t[1]], hole[t[2]]});
