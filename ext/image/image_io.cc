@@ -42,6 +42,72 @@ uint32_t BigEndian32(const std::string& data, size_t offset) {
          uint32_t(uint8_t(data[offset + 3]));
 }
 
+// Where a JPEG 2000 file's codestream starts: at once for a raw codestream
+// (SOC, then SIZ), in the top-level 'jp2c' box of a JP2 file. npos if none.
+size_t Jpeg2000Codestream(const std::string& data) {
+  if (StartsWith(data, "\xFF\x4F\xFF\x51", 4)) return 0;
+  // A box: its length (1: a 64-bit length follows the type; 0: to the end of
+  // the file), its type, its content.
+  for (size_t at = 0; at + 8 <= data.size();) {
+    uint64_t length = BigEndian32(data, at);
+    size_t header = 8;
+    if (length == 1) {
+      if (at + 16 > data.size()) break;
+      length = (uint64_t(BigEndian32(data, at + 8)) << 32) |
+               BigEndian32(data, at + 12);
+      header = 16;
+    } else if (length == 0) {
+      length = data.size() - at;
+    }
+    if (data.compare(at + 4, 4, "jp2c") == 0) return at + header;
+    if (length < header || length > data.size() - at) break;
+    at += length;
+  }
+  return std::string::npos;
+}
+
+// OpenJPEG allocates its structures for every tile and component that the
+// SIZ header claims, about 4 KB each, before OpenCV checks the image size
+// (and OpenCV decodes by signature, whatever the file's name): a 3 KB
+// codestream claiming 65,025 tiles of 1,000 components took 23 GB. A
+// 100-megapixel photograph in 256 x 256 tiles has 1,600.
+std::string CheckJpeg2000(const std::string& data) {
+  constexpr uint64_t kMaxTiles = 4096;
+  constexpr uint32_t kMaxComponents = 4;
+  const size_t start = Jpeg2000Codestream(data);
+  // SOC, SIZ, Lsiz, Rsiz, then the sizes and offsets as 32-bit words.
+  if (start == std::string::npos || start + 42 > data.size() ||
+      data.compare(start, 4, "\xFF\x4F\xFF\x51") != 0) {
+    return "JPEG 2000 without its image and tile size header (SIZ)";
+  }
+  auto word = [&](int k) {
+    return uint64_t(BigEndian32(data, start + 8 + 4 * k));
+  };
+  const uint64_t width = word(0), height = word(1);
+  const uint64_t tile_width = word(4), tile_height = word(5);
+  const uint64_t tile_x = word(6), tile_y = word(7);
+  const uint32_t components =
+      (uint32_t(uint8_t(data[start + 40])) << 8) | uint8_t(data[start + 41]);
+  if (tile_width == 0 || tile_height == 0 || tile_x >= width ||
+      tile_y >= height) {
+    return "JPEG 2000 with an invalid tile grid";
+  }
+  const uint64_t tiles = ((width - tile_x + tile_width - 1) / tile_width) *
+                         ((height - tile_y + tile_height - 1) / tile_height);
+  if (tiles > kMaxTiles || components == 0 || components > kMaxComponents) {
+    return StrCat("JPEG 2000 header claims ",
+                  tiles,
+                  " tiles of ",
+                  components,
+                  " components (read: at most ",
+                  kMaxTiles,
+                  " tiles of 1 to ",
+                  kMaxComponents,
+                  ")");
+  }
+  return "";
+}
+
 // Checks the container so that truncated files are refused: libjpeg and
 // libpng decode what they get and only warn. Returns an error or "".
 std::string CheckContainer(const std::string& data) {
@@ -59,6 +125,10 @@ std::string CheckContainer(const std::string& data) {
       return "truncated PNG (no IEND chunk)";
     }
     return "";
+  }
+  if (StartsWith(data, "\xFF\x4F\xFF\x51", 4) ||
+      StartsWith(data, "\0\0\0\x0CjP  \r\n\x87\n", 12)) {
+    return CheckJpeg2000(data);
   }
   return "";
 }
@@ -95,7 +165,12 @@ std::vector<std::string> ListImages(const std::string& folder) {
 }
 
 cv::Mat ReadImage(const std::string& path, ImageReadMode mode) {
-  const std::string data = ReadFileToString(path);
+  return DecodeImage(ReadFileToString(path), mode, path);
+}
+
+cv::Mat DecodeImage(const std::string& data,
+                    ImageReadMode mode,
+                    const std::string& path) {
   if (data.empty()) ThrowInputError(path, ": empty file, not an image");
   const std::string problem = CheckContainer(data);
   if (!problem.empty()) ThrowInputError(path, ": ", problem);

@@ -31,6 +31,12 @@ enum class ImageReadMode {
 cv::Mat ReadImage(const std::string& path,
                   ImageReadMode mode = ImageReadMode::kUnchanged);
 
+// ReadImage for an image already in memory (embedded in a model file, say):
+// `what` names it in errors.
+cv::Mat DecodeImage(const std::string& data,
+                    ImageReadMode mode,
+                    const std::string& what);
+
 // Three channels (BGR), CV_8U: 16-bit images divided by 257. Throws
 // InputError like ReadImage, and for another depth.
 cv::Mat ReadImageColor8(const std::string& path);

@@ -311,20 +311,6 @@ std::string GlbBytes(const TriangleMesh& mesh,
 // ---------------------------------------------------------------------------
 // Readers.
 
-cv::Mat DecodeAtlas(const std::string& bytes, const std::string& what) {
-  cv::Mat image;
-  try {
-    image = cv::imdecode(
-        cv::Mat(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
-        cv::IMREAD_COLOR);
-  } catch (const cv::Exception&) {
-    image.release();
-  }
-  if (image.empty())
-    ThrowInputError(what, ": embedded image cannot be decoded");
-  return image;
-}
-
 // An atlas as TexturedModel holds it: 8-bit BGR.
 cv::Mat ToAtlas(cv::Mat image) {
   if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
@@ -1081,8 +1067,10 @@ TexturedModel ReadGlbChecked(const std::string& path) {
     if (!image.contains("bufferView")) {
       accessors.Fail("images[", image_index, "] is not embedded (uri)");
     }
-    model.atlas = ToAtlas(
-        DecodeAtlas(accessors.View(image.at("bufferView").get<int>()), path));
+    model.atlas =
+        ToAtlas(DecodeImage(accessors.View(image.at("bufferView").get<int>()),
+                            ImageReadMode::kColor,
+                            StrCat(path, ": embedded image")));
   }
   mesh.Check(path);
   return model;
