@@ -83,7 +83,8 @@ fuzz_one() {
     inputs+=("tests/fuzz/regressions/$target")
   fi
   local before after findings executions last cov exec_s corpus result rc=0
-  before=$(find "$dir/artifacts" -type f ! -name 'slow-unit-*' | wc -l)
+  find "$dir/artifacts" -type f ! -name 'slow-unit-*' | sort >"$dir/artifacts.before"
+  before=$(wc -l <"$dir/artifacts.before")
   local log=$dir/fuzz.log
   # OpenCV allocates what an image header claims, up to 2^30 pixels by
   # default: 2^22 keeps forged headers under the memory limit.
@@ -115,6 +116,21 @@ fuzz_one() {
   printf 'fuzz_%s: %ss, %s executions (%s/s), corpus %s, cov %s, findings %s: %s\n' \
     "$target" "$seconds" "${executions:-0}" "${exec_s:-0}" "$corpus" \
     "${cov:-?}" "$findings" "$result" >"$dir/result"
+  # The input itself, so that a finding in a CI run whose build folder is gone
+  # can be replayed: base64 -d it into tests/fuzz/regressions/TARGET/.
+  if [ "$findings" -gt 0 ]; then
+    local artifact bytes
+    find "$dir/artifacts" -type f ! -name 'slow-unit-*' | sort |
+      comm -13 "$dir/artifacts.before" - | while read -r artifact; do
+        bytes=$(stat -c %s "$artifact")
+        if [ "$bytes" -le 8192 ]; then
+          printf '  %s (%s bytes), base64: %s\n' "$artifact" "$bytes" \
+            "$(base64 -w0 "$artifact")"
+        else
+          printf '  %s (%s bytes)\n' "$artifact" "$bytes"
+        fi
+      done >>"$dir/result"
+  fi
   return $status
 }
 
