@@ -232,14 +232,16 @@ void CheckObjFile(const std::string& path) {
     std::istringstream tokens(line);
     std::string keyword;
     if (!(tokens >> keyword)) continue;
-    if (keyword == "v") {
-      ++num_vertices;
-      // x y z r g b: OpenMesh scales the colour by 255 into a byte, which
-      // for a value outside 0..1 (a file written with 0..255) is undefined.
+    // "v x y z r g b", or OpenMesh's own "vc r g b": OpenMesh scales a
+    // colour by 255 into a byte, which for a value outside 0..1 (a file
+    // written with 0..255) is undefined.
+    if (keyword == "v" || keyword == "vc") {
+      const int first_colour = keyword == "v" ? 3 : 0;
+      if (keyword == "v") ++num_vertices;
       double values[6];
       int n = 0;
-      while (n < 6 && tokens >> values[n]) ++n;
-      for (int i = 3; n == 6 && i < 6; ++i) {
+      while (n < first_colour + 3 && tokens >> values[n]) ++n;
+      for (int i = first_colour; n == first_colour + 3 && i < n; ++i) {
         if (!(values[i] >= 0 && values[i] <= 1)) {
           ThrowInputError(path,
                           ":",
