@@ -408,6 +408,21 @@ TEST(MeshCommand, BadInput) {
       "delaunay_graph_cut: 50 points are too sparse to close a surface",
       dir + "/sparse.ply",
       {out});
+  // configs/ring.ini's Poisson likewise, and neither falls back to the
+  // cylinder.
+  ExpectRefusedWithoutOutput({"mesh",
+                              "--input_path",
+                              dir + "/sparse.ply",
+                              "--output_path",
+                              out,
+                              "--method",
+                              "poisson",
+                              "--depth",
+                              "10"},
+                             "poisson: 50 points are too sparse to close a "
+                             "surface",
+                             dir + "/sparse.ply",
+                             {out});
   ExpectRefusedWithoutOutput({"mesh",
                               "--input_path",
                               fixture + "/plain.ply",

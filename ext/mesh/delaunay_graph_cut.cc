@@ -48,9 +48,6 @@ Point ToPoint(const Eigen::Vector3d& p) { return Point(p.x(), p.y(), p.z()); }
 // min_distance on a side (the first point in each), and for each the
 // stations of every point merged into it (at most kMaxRays, distinct).
 constexpr int kMaxRays = 6;
-// Fewer points than this span no surface worth closing: a few hundred
-// tetrahedra around a handful of points.
-constexpr size_t kMinPoints = 100;
 struct Vertices {
   std::vector<int> point_index;  // into the cloud
   std::vector<std::vector<int>> stations;
@@ -270,13 +267,7 @@ TriangleMesh DelaunayGraphCutMesh(
     double median_spacing,
     int num_threads) {
   options.Check();
-  if (cloud.size() < kMinPoints) {
-    ThrowInputError("delaunay_graph_cut: ",
-                    cloud.size(),
-                    " points are too sparse to close a surface (",
-                    kMinPoints,
-                    " or more; the cylinder, --method cylinder, needs fewer)");
-  }
+  CheckEnoughPointsToClose(cloud, "delaunay_graph_cut");
   if (point_stations.size() != cloud.size()) {
     ThrowInputError("delaunay_graph_cut: the images that saw ",
                     point_stations.size(),

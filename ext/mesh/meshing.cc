@@ -71,6 +71,19 @@ void GreedyProjectionOptions::Check() const {
               max_surface_angle_deg);
 }
 
+void CheckEnoughPointsToClose(const PointCloud& cloud,
+                              const std::string& method) {
+  constexpr size_t kMinPoints = 100;
+  if (cloud.size() < kMinPoints) {
+    ThrowInputError(method,
+                    ": ",
+                    cloud.size(),
+                    " points are too sparse to close a surface (",
+                    kMinPoints,
+                    " or more; the cylinder, --method cylinder, needs fewer)");
+  }
+}
+
 void PoissonOptions::Check() const {
   CheckOption(depth >= 4 && depth <= 14, "--depth", "in [4, 14]", depth);
   CheckOption(

@@ -168,6 +168,14 @@ struct MeshReport {
   std::string Summary() const;
 };
 
+// The methods that close a surface in 3D (poisson, delaunay_graph_cut) are
+// refused fewer than 100 points, which span no surface worth closing (a
+// few hundred tetrahedra, or a Poisson blob, around a handful of points):
+// InputError naming `method`, and the cylinder, which needs fewer. Never
+// falls back to another method silently.
+void CheckEnoughPointsToClose(const PointCloud& cloud,
+                              const std::string& method);
+
 // The methods one by one, on a checked cloud; `median_spacing` is its median
 // nearest-neighbour distance (MedianPointSpacing). The meshes' vertices are
 // the cloud's points (greedy projection, advancing front; unreferenced ones

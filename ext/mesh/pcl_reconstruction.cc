@@ -86,6 +86,7 @@ TriangleMesh PoissonMesh(const PointCloud& cloud,
                          int num_threads,
                          size_t* num_trimmed_faces) {
   options.Check();
+  CheckEnoughPointsToClose(cloud, "poisson");
   RequireNormals(cloud, "poisson");
   const CenteredPclCloud centered(cloud.positions);
   const auto points = ToPointNormals(cloud, centered.center);
