@@ -213,5 +213,42 @@ TEST(Pipeline, BadInputIsRefusedBeforeAnyWork) {
   ExpectRefused(dir, images, {}, {"stage import", "cannot share one camera"});
 }
 
+// Two photographs of different objects: features and match run, and the
+// first stage that needs an overlap says so in one line, exit code 2.
+TEST(Pipeline, PhotographsThatDoNotOverlapAreNamed) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  BAYON_REQUIRE_DATA("herz-jesu-P8");
+  const std::string dir = testing::TempDir("pipeline_no_overlap");
+  const std::string images = dir + "/images";
+  fs::create_directories(images);
+  fs::copy_file(testing::DataPath("temple-ring") + "/templeSR0001.png",
+                images + "/temple.png");
+  cv::Mat church =
+      cv::imread(testing::DataPath("herz-jesu-P8") + "/images/0000.jpg");
+  ASSERT_FALSE(church.empty());
+  cv::resize(church, church, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+  ASSERT_TRUE(cv::imwrite(images + "/church.png", church));
+  const std::string config = dir + "/camera.ini";
+  std::ofstream(config) << "[import]\ncamera_model = PINHOLE\n"
+                           "camera_params = 1520.4,1525.9,302.82,247.37\n";
+  const testing::CommandResult run = RunBayon({"pipeline",
+                                               "--workspace_path",
+                                               dir + "/ws",
+                                               "--image_path",
+                                               images,
+                                               "--config",
+                                               testing::ConfigPath("ring.ini"),
+                                               "--config",
+                                               config,
+                                               "--num_threads",
+                                               "2"});
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.LastLine().find("stage relative"), std::string::npos)
+      << run.LastLine();
+  EXPECT_NE(run.LastLine().find("overlap"), std::string::npos)
+      << run.LastLine();
+  EXPECT_FALSE(fs::exists(dir + "/ws/sparse"));
+}
+
 }  // namespace
 }  // namespace bayon

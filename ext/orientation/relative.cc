@@ -286,6 +286,30 @@ std::vector<FocalLengthReport> EstimateUnknownFocalLengths(
   return reports;
 }
 
+// Why no pair could be oriented: the pair with the most matches and what
+// stopped it. With nothing oriented there is no model to build, and most
+// often the photographs do not overlap.
+std::string NoPairOrientedReason(
+    const std::vector<PairOrientationReport>& pairs) {
+  const auto best = std::max_element(
+      pairs.begin(),
+      pairs.end(),
+      [](const PairOrientationReport& a, const PairOrientationReport& b) {
+        return a.num_matches < b.num_matches;
+      });
+  return StrCat("none of the ",
+                pairs.size(),
+                " matched image pairs could be oriented; the best, ",
+                best->name1,
+                " - ",
+                best->name2,
+                ", ",
+                best->num_matches,
+                " matches: ",
+                best->reason,
+                ". Do the photographs overlap?");
+}
+
 }  // namespace
 
 RelativeSummary OrientImagePairs(const std::string& database_path,
@@ -308,7 +332,8 @@ RelativeSummary OrientImagePairs(const std::string& database_path,
   }
   if (matched.empty()) {
     ThrowInputError(database_path,
-                    ": no matched image pairs (run `bayon match` first)");
+                    ": no matched image pairs (run `bayon match` first; if "
+                    "it ran, no two photographs overlap)");
   }
   std::map<image_t, std::string> names;
   std::map<image_t, camera_t> camera_of_image;
@@ -411,6 +436,9 @@ RelativeSummary OrientImagePairs(const std::string& database_path,
     summary.pairs.push_back(job.report);
   }
   summary.seconds = timer.Seconds();
+  if (summary.num_oriented + summary.num_skipped == 0) {
+    ThrowInputError(database_path, ": ", NoPairOrientedReason(summary.pairs));
+  }
   return summary;
 }
 

@@ -108,7 +108,9 @@ ConjugatePoints PairConjugatePoints(const FeatureKeypoints& keypoints1,
 
 // Orients the pairs. Bad input throws InputError before anything is
 // written (no images, no matched pairs, a camera that cannot be used); a
-// pair that cannot be oriented is reported, the others are still done.
+// pair that cannot be oriented is reported, the others are still done. If
+// none can be (photographs that do not overlap), InputError after them,
+// naming the pair with the most matches and what stopped it.
 RelativeSummary OrientImagePairs(const std::string& database_path,
                                  const RelativeOptions& options);
 
