@@ -82,9 +82,8 @@ fuzz_one() {
   if [ -d "tests/fuzz/regressions/$target" ]; then
     inputs+=("tests/fuzz/regressions/$target")
   fi
-  local before after findings executions last cov exec_s corpus result rc=0
+  local new_artifacts findings executions last cov exec_s corpus result rc=0
   find "$dir/artifacts" -type f ! -name 'slow-unit-*' | sort >"$dir/artifacts.before"
-  before=$(wc -l <"$dir/artifacts.before")
   local log=$dir/fuzz.log
   # OpenCV allocates what an image header claims, up to 2^30 pixels by
   # default: 2^22 keeps forged headers under the memory limit.
@@ -97,8 +96,9 @@ fuzz_one() {
       -artifact_prefix="$dir/artifacts/" -print_final_stats=1 "${flags[@]}" \
       >"$log" 2>&1 || rc=$?
   rm -rf "$dir/tmp"
-  after=$(find "$dir/artifacts" -type f ! -name 'slow-unit-*' | wc -l)
-  findings=$((after - before))
+  new_artifacts=$(find "$dir/artifacts" -type f ! -name 'slow-unit-*' | sort |
+    comm -13 "$dir/artifacts.before" -)
+  findings=$(grep -c . <<<"$new_artifacts" || true)
   executions=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   last=$(grep -a -E '^#[0-9]+' "$log" | tail -1 || true)
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
@@ -120,16 +120,15 @@ fuzz_one() {
   # can be replayed: base64 -d it into tests/fuzz/regressions/TARGET/.
   if [ "$findings" -gt 0 ]; then
     local artifact bytes
-    find "$dir/artifacts" -type f ! -name 'slow-unit-*' | sort |
-      comm -13 "$dir/artifacts.before" - | while read -r artifact; do
-        bytes=$(stat -c %s "$artifact")
-        if [ "$bytes" -le 8192 ]; then
-          printf '  %s (%s bytes), base64: %s\n' "$artifact" "$bytes" \
-            "$(base64 -w0 "$artifact")"
-        else
-          printf '  %s (%s bytes)\n' "$artifact" "$bytes"
-        fi
-      done >>"$dir/result"
+    while read -r artifact; do
+      bytes=$(stat -c %s "$artifact")
+      if [ "$bytes" -le 8192 ]; then
+        printf '  %s (%s bytes), base64: %s\n' "$artifact" "$bytes" \
+          "$(base64 -w0 "$artifact")"
+      else
+        printf '  %s (%s bytes)\n' "$artifact" "$bytes"
+      fi
+    done <<<"$new_artifacts" >>"$dir/result"
   fi
   return $status
 }
