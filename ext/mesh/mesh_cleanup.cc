@@ -374,7 +374,6 @@ void FillHoles(int max_hole_edges, OmMesh* mesh, MeshCleanupReport* report) {
   for (const auto& hole : holes) {
     std::vector<OmMesh::Point> corners;
     for (OmMesh::VertexHandle v : hole) corners.push_back(mesh->point(v));
-    size_t added = 0;
     // The boundary halfedges run the loop the way a face filling the hole
     // runs its edges, so triangles in loop order are oriented like their
     // neighbours. They go in as ears of the boundary as it stands
@@ -383,21 +382,17 @@ void FillHoles(int max_hole_edges, OmMesh* mesh, MeshCleanupReport* report) {
     for (const auto& t : MinimumAreaTriangulation(corners)) {
       pending.push_back({hole[t[0]], hole[t[1]], hole[t[2]]});
     }
-    bool progress = true;
-    while (progress && !pending.empty()) {
-      progress = false;
-      for (size_t k = 0; k < pending.size();) {
-        const std::array<OmMesh::VertexHandle, 3>& face = pending[k];
-        if (CanAddFace(*mesh, face) &&
-            mesh->add_face(face[0], face[1], face[2]).is_valid()) {
-          ++added;
-          progress = true;
-          pending.erase(pending.begin() + static_cast<std::ptrdiff_t>(k));
-        } else {
-          ++k;
-        }
-      }
+    const auto add = [&](const std::array<OmMesh::VertexHandle, 3>& face) {
+      return CanAddFace(*mesh, face) &&
+             mesh->add_face(face[0], face[1], face[2]).is_valid();
+    };
+    const size_t num_triangles = pending.size();
+    for (size_t before = 0; before != pending.size();) {
+      before = pending.size();
+      pending.erase(std::remove_if(pending.begin(), pending.end(), add),
+                    pending.end());
     }
+    const size_t added = num_triangles - pending.size();
     if (added > 0) {
       ++report->num_holes_filled;
       report->num_fill_faces += added;

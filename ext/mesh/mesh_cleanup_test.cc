@@ -116,6 +116,15 @@ TriangleMesh GridWithHoles(int n, Cut cut) {
   return mesh;
 }
 
+// `mesh` through CleanupMesh with holes of up to `max_hole_edges` filled.
+TriangleMesh CleanupFillingHoles(const TriangleMesh& mesh,
+                                 int max_hole_edges,
+                                 MeshCleanupReport* report) {
+  MeshCleanupOptions options;
+  options.max_hole_edges = max_hole_edges;
+  return CleanupMesh(mesh, options, report);
+}
+
 TEST(MeshCleanup, FillsSmallHolesOnly) {
   // Two holes: one square (2 faces) and a 3 x 3 block (18 faces).
   const TriangleMesh mesh = GridWithHoles(10, [](int i, int j) {
@@ -124,10 +133,8 @@ TEST(MeshCleanup, FillsSmallHolesOnly) {
     return small_hole || large_hole;
   });
   EXPECT_EQ(ComputeMeshTopology(mesh).num_boundary_loops, 3u);
-  MeshCleanupOptions options;
-  options.max_hole_edges = 6;
   MeshCleanupReport report;
-  const TriangleMesh clean = CleanupMesh(mesh, options, &report);
+  const TriangleMesh clean = CleanupFillingHoles(mesh, 6, &report);
   EXPECT_EQ(report.num_holes_filled, 1u);
   EXPECT_EQ(report.num_fill_faces, 2u);
   const MeshTopology t = ComputeMeshTopology(clean);
@@ -142,10 +149,8 @@ TEST(MeshCleanup, FillsAHoleWholeEarByEar) {
   // all of its 10 triangles go in.
   const TriangleMesh mesh = GridWithHoles(
       10, [](int i, int j) { return i >= 4 && i <= 6 && j >= 4 && j <= 6; });
-  MeshCleanupOptions options;
-  options.max_hole_edges = 12;
   MeshCleanupReport report;
-  const TriangleMesh clean = CleanupMesh(mesh, options, &report);
+  const TriangleMesh clean = CleanupFillingHoles(mesh, 12, &report);
   EXPECT_EQ(report.num_holes_filled, 1u);
   EXPECT_EQ(report.num_fill_faces, 10u);
   const MeshTopology t = ComputeMeshTopology(clean);
