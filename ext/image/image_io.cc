@@ -42,10 +42,20 @@ uint32_t BigEndian32(const std::string& data, size_t offset) {
          uint32_t(uint8_t(data[offset + 3]));
 }
 
-// Where a JPEG 2000 file's codestream starts: at once for a raw codestream
-// (SOC, then SIZ), in the top-level 'jp2c' box of a JP2 file. npos if none.
+// A JPEG 2000 codestream starts with its SOC and SIZ markers; a JP2 file
+// with its signature box.
+constexpr char kJpeg2000Codestream[] = "\xFF\x4F\xFF\x51";
+constexpr char kJp2Signature[] = "\0\0\0\x0CjP  \r\n\x87\n";
+
+bool IsJpeg2000(const std::string& data) {
+  return StartsWith(data, kJpeg2000Codestream, 4) ||
+         StartsWith(data, kJp2Signature, 12);
+}
+
+// Where a JPEG 2000 file's codestream starts: at once for a raw codestream,
+// in the top-level 'jp2c' box of a JP2 file. npos if none.
 size_t Jpeg2000Codestream(const std::string& data) {
-  if (StartsWith(data, "\xFF\x4F\xFF\x51", 4)) return 0;
+  if (StartsWith(data, kJpeg2000Codestream, 4)) return 0;
   // A box: its length (1: a 64-bit length follows the type; 0: to the end of
   // the file), its type, its content.
   for (size_t at = 0; at + 8 <= data.size();) {
@@ -77,7 +87,7 @@ std::string CheckJpeg2000(const std::string& data) {
   const size_t start = Jpeg2000Codestream(data);
   // SOC, SIZ, Lsiz, Rsiz, then the sizes and offsets as 32-bit words.
   if (start == std::string::npos || start + 42 > data.size() ||
-      data.compare(start, 4, "\xFF\x4F\xFF\x51") != 0) {
+      data.compare(start, 4, kJpeg2000Codestream, 4) != 0) {
     return "JPEG 2000 without its image and tile size header (SIZ)";
   }
   auto word = [&](int k) {
@@ -126,10 +136,7 @@ std::string CheckContainer(const std::string& data) {
     }
     return "";
   }
-  if (StartsWith(data, "\xFF\x4F\xFF\x51", 4) ||
-      StartsWith(data, "\0\0\0\x0CjP  \r\n\x87\n", 12)) {
-    return CheckJpeg2000(data);
-  }
+  if (IsJpeg2000(data)) return CheckJpeg2000(data);
   return "";
 }
 
