@@ -236,6 +236,10 @@ int RunDense(int argc, char** argv) {
   app.add_option("--convergence_px",
                  options.mpgc.convergence_px,
                  "MPGC: converged when no patch centre moves more, px");
+  app.add_option("--convergence_sigma",
+                 options.mpgc.convergence_sigma,
+                 "MPGC: converged also when a step moves the solution by "
+                 "less than this many standard deviations (0: off)");
   app.add_option("--max_iterations",
                  options.mpgc.max_iterations,
                  "MPGC: most iterations per solution");

@@ -68,6 +68,10 @@ struct MpgcOptions {
   int max_iterations = 30;
   // Converged when no patch centre moves by more than this, pixels.
   double convergence_px = 0.005;
+  // Converged also when a step lowers the sum of squares by less than
+  // (convergence_sigma * sigma0)^2, that is moves the solution by less than
+  // that many of its standard deviations; 0: by convergence_px alone.
+  double convergence_sigma = 0.3;
   // A search patch whose centre moves further from its approximation is
   // dropped (pixels).
   double max_shift_px = 5.0;
