@@ -30,6 +30,7 @@ nlohmann::ordered_json ReportToJson(const DenseReport& report,
   json["cells_per_second"] = report.CellsPerSecond();
   json["points_per_second"] = report.PointsPerSecond();
   json["mode"] = options.mode == DenseMode::kPaper ? "paper" : "multiview";
+  json["added_sigma"] = report.added_sigma;
   if (options.mode == DenseMode::kPaper) {
     json["cell_size"] = options.cell_size;
   } else {
@@ -141,6 +142,11 @@ int RunDense(int argc, char** argv) {
   app.add_option("--max_cost",
                  options.fusion.max_cost,
                  "multiview: largest matching cost (1 - NCC) fused");
+  app.add_option("--add_unmodelled_sigma",
+                 options.add_unmodelled_sigma,
+                 "Add the errors MPGC's model leaves out, estimated from the "
+                 "cloud's scatter about its local surface, to the points' "
+                 "sigmas in quadrature");
   app.add_option("--refine",
                  options.refine,
                  "multiview: MPGC for every fused point (0: the fused points, "
@@ -333,6 +339,9 @@ int RunDense(int argc, char** argv) {
                             masters.size(),
                             " master images:\n",
                             report.Summary()));
+  }
+  if (options.add_unmodelled_sigma) {
+    AddUnmodelledSigma(options.num_threads, &cloud, &report);
   }
   // .vis indices: positions in the model's image list.
   std::map<image_t, uint32_t> index_of;

@@ -438,6 +438,22 @@ double EstimateAddedSigma(const PointCloud& cloud,
   return std::sqrt(ab(1) / ab(0));
 }
 
+// A floor for the deviation's variance, so that noise-free input is not
+// judged against a zero scatter.
+double MinDeviationVariance(const PointCloud& cloud) {
+  Eigen::Vector3d min = cloud.positions[0], max = cloud.positions[0];
+  for (const Eigen::Vector3d& p : cloud.positions) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
+  return std::pow(1e-7 * (max - min).norm(), 2);
+}
+
+// The neighbours found per point for patches of k: spares for those flagged
+// on the way (2 % blunders leave about one in a neighbourhood of 24; eight
+// spares cover clusters).
+int NeighborhoodWidth(int k) { return k + 8; }
+
 // The median distance from a point to its nearest neighbour, over up to
 // 20000 points spread over the cloud.
 double MedianSpacing(const CenteredPclCloud& pcl_cloud) {
@@ -608,6 +624,23 @@ double CheckedSigma(const PointAttribute& attribute,
 
 }  // namespace
 
+double EstimateUnmodelledSigma(const PointCloud& cloud,
+                               int num_neighbors,
+                               int num_threads,
+                               const std::string& what) {
+  CheckCloudSpansSurface(cloud, num_neighbors + 1, what);
+  const std::vector<Eigen::Vector3d> sigmas = PointSigmas(cloud, what);
+  if (sigmas.empty()) return 0;
+  const int width = NeighborhoodWidth(num_neighbors);
+  return EstimateAddedSigma(cloud,
+                            sigmas,
+                            NearestNeighbors(cloud, width, num_threads),
+                            width,
+                            num_neighbors,
+                            MinDeviationVariance(cloud),
+                            num_threads);
+}
+
 std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
                                          const std::string& what) {
   // A dense matcher's covariance is long along the viewing ray and leans
@@ -731,17 +764,8 @@ PointCloud EditPointCloud(const PointCloud& cloud,
       sigmas = PointSigmas(cloud, what);
     }
     report->used_point_precision = !sigmas.empty();
-    Eigen::Vector3d min = cloud.positions[0], max = cloud.positions[0];
-    for (const Eigen::Vector3d& p : cloud.positions) {
-      min = min.cwiseMin(p);
-      max = max.cwiseMax(p);
-    }
-    // A floor for the deviation's variance, so that noise-free input is not
-    // judged against a zero scatter.
-    const double min_variance = std::pow(1e-7 * (max - min).norm(), 2);
-    // Spare neighbours for those flagged on the way (2 % blunders leave
-    // about one in a neighbourhood of 24; eight spares cover clusters).
-    const int width = options.surface_fit.num_neighbors + 8;
+    const double min_variance = MinDeviationVariance(cloud);
+    const int width = NeighborhoodWidth(options.surface_fit.num_neighbors);
     const std::vector<int> nearest =
         NearestNeighbors(cloud, width, options.num_threads);
     const double spacing = MedianPointSpacing(cloud);

@@ -171,6 +171,21 @@ PointCloud EditPointCloud(const PointCloud& cloud,
 std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
                                          const std::string& what);
 
+// The standard deviation that errors the points' stated precision leaves
+// out add to every point, in object units: the variance component that
+// kSurfaceFit estimates before its first iteration (every point's deviation
+// from the second-order patch of its num_neighbors nearest, against its
+// stated variance along the normal), for a matcher to state its points'
+// precision with. It also holds the height uncertainty of the patches the
+// points are compared with (about a fifth of the neighbours' variance), so
+// it errs on the safe side. 0 where the cloud has no sigmas or they explain
+// the scatter; InputError naming `what` for a cloud CheckCloudSpansSurface
+// refuses or an invalid sigma.
+double EstimateUnmodelledSigma(const PointCloud& cloud,
+                               int num_neighbors,
+                               int num_threads,
+                               const std::string& what);
+
 // The median distance from a point to its nearest neighbour, over up to
 // 20000 points spread evenly over the cloud (0 for fewer than 2 points).
 double MedianPointSpacing(const PointCloud& cloud);
