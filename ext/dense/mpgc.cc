@@ -768,9 +768,11 @@ MpgcResult MatchMpgc(const MpgcView& master,
       if (step_cost - system.cost < options.convergence_sigma *
                                         options.convergence_sigma *
                                         system.cost / system.num_observations) {
-        // The step lowered the sum of squares by less than (k sigma0)^2: it
-        // moved the solution by less than k of its standard deviations
-        // (v'Pv falls by dx' N dx, and sigma0^2 N^-1 is dx's covariance).
+        // The step lowered the sum of squares by less than (k sigma0)^2
+        // (sigma0^2 as v'Pv over the observations, which outnumber the
+        // unknowns more than tenfold): it moved the solution by less than k of
+        // its standard deviations (v'Pv falls by dx' N dx, and sigma0^2 N^-1 is
+        // dx's covariance).
         converged = true;
         ++iteration;
         break;
