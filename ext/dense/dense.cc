@@ -1339,8 +1339,12 @@ void AddUnmodelledSigma(int num_threads,
   // quadric follows, and the estimate takes it for error (rendered tower,
   // paper mode: 4.5 mm added, the true errors then 0.59 times the stated
   // sigmas, against 1.48 without).
+  // Nor does a cloud without MPGC (refine off), whose sigmas are zeros.
   if (report->mode != DenseMode::kMultiView || s_normal == nullptr ||
-      cloud->size() < 200) {
+      cloud->size() < 200 ||
+      std::any_of(s_normal->values.begin(),
+                  s_normal->values.end(),
+                  [](double s) { return !(s > 0) || !std::isfinite(s); })) {
     return;
   }
   const double added =

@@ -320,6 +320,16 @@ TEST(AddUnmodelledSigma, StatesWhatTheScatterShowsAndNoMore) {
   AddUnmodelledSigma(2, &kept, &paper);
   EXPECT_EQ(paper.added_sigma, 0);
   EXPECT_EQ(kept.FindAttribute("s_normal")->values, stated);
+  // So do the fused points without MPGC, whose sigmas are zeros.
+  PointCloud unrefined = NoisyPlane(0.0015);
+  for (const char* name : {"sx", "sy", "sz", "s_normal"}) {
+    unrefined.FindAttribute(name)->values.assign(unrefined.size(), 0);
+  }
+  DenseReport fused;
+  fused.mode = DenseMode::kMultiView;
+  AddUnmodelledSigma(2, &unrefined, &fused);
+  EXPECT_EQ(fused.added_sigma, 0);
+  EXPECT_EQ(unrefined.FindAttribute("s_normal")->values[7], 0);
 }
 
 }  // namespace
