@@ -340,9 +340,7 @@ int RunDense(int argc, char** argv) {
                             " master images:\n",
                             report.Summary()));
   }
-  if (options.add_unmodelled_sigma) {
-    AddUnmodelledSigma(options.num_threads, &cloud, &report);
-  }
+  AddUnmodelledSigma(options, &cloud, &report);
   // .vis indices: positions in the model's image list.
   std::map<image_t, uint32_t> index_of;
   for (const auto& [image_id, image] : scene.images) {

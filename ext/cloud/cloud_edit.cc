@@ -384,6 +384,11 @@ void SurfaceFitPass(const PointCloud& cloud,
 // chi-square(1)), and a line var = a sigma^2 + b through the bins by least
 // squares; sqrt(b / a), or 0 where b <= 0 or a <= 0 (the stated sigmas
 // already explain the scatter).
+// The bins of stated variance EstimateAddedSigma fits its line through, and
+// the fewest tested points that fill them (20 each).
+constexpr int kBins = 10;
+constexpr size_t kMinPointsToEstimateAddedSigma = 20 * kBins;
+
 double EstimateAddedSigma(const PointCloud& cloud,
                           const std::vector<Eigen::Vector3d>& sigmas,
                           const std::vector<int>& nearest,
@@ -413,8 +418,7 @@ double EstimateAddedSigma(const PointCloud& cloud,
                            test.deviation[i] * test.deviation[i]);
     }
   }
-  constexpr int kBins = 10;
-  if (samples.size() < 20 * kBins) return 0;
+  if (samples.size() < kMinPointsToEstimateAddedSigma) return 0;
   std::sort(samples.begin(), samples.end());
   Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
   Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
@@ -628,6 +632,7 @@ double EstimateUnmodelledSigma(const PointCloud& cloud,
                                int num_neighbors,
                                int num_threads,
                                const std::string& what) {
+  if (cloud.size() < kMinPointsToEstimateAddedSigma) return 0;
   CheckCloudSpansSurface(cloud, num_neighbors + 1, what);
   const std::vector<Eigen::Vector3d> sigmas = PointSigmas(cloud, what);
   if (sigmas.empty()) return 0;

@@ -178,9 +178,9 @@ std::vector<Eigen::Vector3d> PointSigmas(const PointCloud& cloud,
 // stated variance along the normal), for a matcher to state its points'
 // precision with. It also holds the height uncertainty of the patches the
 // points are compared with (about a fifth of the neighbours' variance), so
-// it errs on the safe side. 0 where the cloud has no sigmas or they explain
-// the scatter; InputError naming `what` for a cloud CheckCloudSpansSurface
-// refuses or an invalid sigma.
+// it errs on the safe side. 0 where the cloud has no sigmas, too few points
+// to tell (under 200) or sigmas that explain the scatter; InputError naming
+// `what` for a cloud CheckCloudSpansSurface refuses or an invalid sigma.
 double EstimateUnmodelledSigma(const PointCloud& cloud,
                                int num_neighbors,
                                int num_threads,

@@ -1328,27 +1328,23 @@ void DensePointAttributes::MoveInto(PointCloud* cloud) {
       std::move(correlation);
 }
 
-void AddUnmodelledSigma(int num_threads,
+void AddUnmodelledSigma(const DenseOptions& options,
                         PointCloud* cloud,
                         DenseReport* report) {
-  const int k = SurfaceFitEditOptions().num_neighbors;
-  PointAttribute* s_normal = cloud->FindAttribute("s_normal");
-  // EstimateUnmodelledSigma needs 20 points per tenth of the precision's
-  // range, so smaller clouds keep their own. So do the paper mode's, whose
-  // points lie a cell apart: their nearest neighbours span relief that no
-  // quadric follows, and the estimate takes it for error (rendered tower,
-  // paper mode: 4.5 mm added, the true errors then 0.59 times the stated
-  // sigmas, against 1.48 without).
-  // Nor does a cloud without MPGC (refine off), whose sigmas are zeros.
-  if (report->mode != DenseMode::kMultiView || s_normal == nullptr ||
-      cloud->size() < 200 ||
-      std::any_of(s_normal->values.begin(),
-                  s_normal->values.end(),
-                  [](double s) { return !(s > 0) || !std::isfinite(s); })) {
+  // Without MPGC (refine off) the points state no precision (zeros). The
+  // paper mode's points lie a cell apart: their nearest neighbours span
+  // relief that no quadric follows, and the estimate takes it for error
+  // (rendered tower, paper mode: 4.5 mm added, the true errors then 0.59
+  // times the stated sigmas, against 1.48 without).
+  if (!options.add_unmodelled_sigma || !options.refine ||
+      options.mode != DenseMode::kMultiView) {
     return;
   }
   const double added =
-      EstimateUnmodelledSigma(*cloud, k, num_threads, "dense cloud");
+      EstimateUnmodelledSigma(*cloud,
+                              SurfaceFitEditOptions().num_neighbors,
+                              options.num_threads,
+                              "dense cloud");
   report->added_sigma = added;
   if (added == 0) return;
   for (const char* name : {"sx", "sy", "sz", "s_normal"}) {

@@ -260,10 +260,10 @@ struct DenseReport {
 
 // Adds the standard deviation of the errors MPGC's model leaves out
 // (DenseOptions::add_unmodelled_sigma) to the cloud's sx, sy, sz and
-// s_normal in quadrature, and states it in report->added_sigma. A cloud
-// without sigmas (no MPGC), too small to judge or of the paper mode keeps
-// its own.
-void AddUnmodelledSigma(int num_threads,
+// s_normal in quadrature, and states it in report->added_sigma. The paper
+// mode's clouds, those without MPGC and those too small to judge keep
+// their own.
+void AddUnmodelledSigma(const DenseOptions& options,
                         PointCloud* cloud,
                         DenseReport* report);
 

@@ -290,11 +290,13 @@ PointCloud NoisyPlane(double unmodelled) {
 }
 
 TEST(AddUnmodelledSigma, StatesWhatTheScatterShowsAndNoMore) {
+  DenseOptions options;
+  options.mode = DenseMode::kMultiView;
+  options.num_threads = 2;
   DenseReport report;
-  report.mode = DenseMode::kMultiView;
   PointCloud optimistic = NoisyPlane(0.0015);
   const double before = optimistic.FindAttribute("s_normal")->values[7];
-  AddUnmodelledSigma(2, &optimistic, &report);
+  AddUnmodelledSigma(options, &optimistic, &report);
   std::printf("1.5 mm left out: added %.5f m\n", report.added_sigma);
   // The estimate also holds the uncertainty of the patch each point is
   // compared with (its neighbours' errors, about a fifth of their
@@ -309,25 +311,27 @@ TEST(AddUnmodelledSigma, StatesWhatTheScatterShowsAndNoMore) {
   }
   // Stated as scattered: nothing (or next to nothing) to add.
   PointCloud honest = NoisyPlane(0);
-  AddUnmodelledSigma(2, &honest, &report);
+  AddUnmodelledSigma(options, &honest, &report);
   std::printf("nothing left out: added %.5f m\n", report.added_sigma);
   EXPECT_LT(report.added_sigma, 0.0007);
   // The paper mode's clouds keep their own (dense.cc says why).
+  DenseOptions paper_options = options;
+  paper_options.mode = DenseMode::kPaper;
   DenseReport paper;
-  paper.mode = DenseMode::kPaper;
   PointCloud kept = NoisyPlane(0.0015);
   const std::vector<double> stated = kept.FindAttribute("s_normal")->values;
-  AddUnmodelledSigma(2, &kept, &paper);
+  AddUnmodelledSigma(paper_options, &kept, &paper);
   EXPECT_EQ(paper.added_sigma, 0);
   EXPECT_EQ(kept.FindAttribute("s_normal")->values, stated);
   // So do the fused points without MPGC, whose sigmas are zeros.
+  DenseOptions unrefined_options = options;
+  unrefined_options.refine = false;
   PointCloud unrefined = NoisyPlane(0.0015);
   for (const char* name : {"sx", "sy", "sz", "s_normal"}) {
     unrefined.FindAttribute(name)->values.assign(unrefined.size(), 0);
   }
   DenseReport fused;
-  fused.mode = DenseMode::kMultiView;
-  AddUnmodelledSigma(2, &unrefined, &fused);
+  AddUnmodelledSigma(unrefined_options, &unrefined, &fused);
   EXPECT_EQ(fused.added_sigma, 0);
   EXPECT_EQ(unrefined.FindAttribute("s_normal")->values[7], 0);
 }
