@@ -24,6 +24,7 @@ int RunMatch(int argc, char** argv);
 int RunRelative(int argc, char** argv);
 int RunDisparity(int argc, char** argv);
 int RunTiePoints(int argc, char** argv);
+int RunTargets(int argc, char** argv);
 int RunRefineKeypoints(int argc, char** argv);
 int RunRender(int argc, char** argv);
 int RunTexture(int argc, char** argv);

@@ -1,0 +1,150 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/colmap/control_io.h"
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+#include "ext/targets/find_targets.h"
+#include "tools/command.h"
+#include "tools/commands.h"
+
+#include <nlohmann/json.hpp>
+
+namespace bayon {
+namespace {
+
+nlohmann::ordered_json ReportToJson(const CodedTargetSummary& summary,
+                                    const CodedTargetOptions& options) {
+  nlohmann::ordered_json json;
+  json["dictionary"] = options.dictionary;
+  json["num_targets"] = summary.num_targets;
+  json["num_measurements"] = summary.measurements.size();
+  json["num_refused"] = summary.num_refused;
+  json["median_sigma_px"] = summary.median_sigma_px;
+  json["seconds"] = summary.seconds;
+  json["images"] = nlohmann::ordered_json::array();
+  for (const CodedTargetImageReport& image : summary.images) {
+    json["images"].push_back({{"name", image.image_name},
+                              {"num_decoded", image.detection.num_decoded},
+                              {"num_measured", image.detection.num_measured},
+                              {"refused", image.detection.refused}});
+  }
+  return json;
+}
+
+// "0-19" or "1,5,7" (or both mixed) into codes.
+std::vector<int> ParseCodes(const std::string& text) {
+  std::vector<int> codes;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t end = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, end - start);
+    const size_t dash = item.find('-');
+    try {
+      size_t used = 0;
+      const int first = std::stoi(item, &used);
+      const int last = dash == std::string::npos
+                           ? first
+                           : std::stoi(item.substr(dash + 1), &used);
+      if (last < first) throw std::invalid_argument(item);
+      for (int code = first; code <= last; ++code) codes.push_back(code);
+    } catch (const std::logic_error&) {
+      ThrowInputError("--codes: '", item, "' is not a code or a range a-b");
+    }
+    start = end + 1;
+  }
+  return codes;
+}
+
+}  // namespace
+
+int RunTargets(int argc, char** argv) {
+  std::string database_path, image_path, output_path, report_path, log_path;
+  std::string print_path, codes_text = "0-11";
+  double side_mm = 40;
+  bool overwrite = false;
+  int num_threads = -1;
+  CodedTargetOptions options;
+  CommandLine command(
+      "targets",
+      "Find, decode and measure coded targets (ArUco / AprilTag markers, "
+      "through OpenCV's aruco module) in every photograph of a database: "
+      "each target's centre where its four edge lines' diagonals meet, to a "
+      "hundredth of a pixel, with its standard deviation. Writes the "
+      "measurements as control/observations.txt lines (NAME IMAGE X Y "
+      "SIGMA), for `tiepoints --manual_path` and control. With --print, "
+      "writes a printable sheet of targets (SVG, A4) instead.");
+  CLI::App& app = command.app();
+  app.add_option("--database_path", database_path, "COLMAP database");
+  app.add_option("--image_path", image_path, "Folder of the photographs");
+  app.add_option("--output_path",
+                 output_path,
+                 "Measurements (control/observations.txt format)");
+  app.add_option("--dictionary",
+                 options.dictionary,
+                 "aruco_4x4_50, aruco_5x5_100, aruco_6x6_250 or "
+                 "apriltag_36h11");
+  app.add_option(
+      "--name_prefix", options.name_prefix, "Names are this and the code");
+  app.add_option("--min_side_px",
+                 options.min_side_px,
+                 "Markers with shorter sides are not looked for, px");
+  app.add_option("--edge_search_px",
+                 options.edge_search_px,
+                 "How far across a side its edge is looked for, px");
+  app.add_option("--max_line_sigma_px",
+                 options.max_line_sigma_px,
+                 "A side whose edge points scatter more is no measurement, "
+                 "px");
+  app.add_option("--print",
+                 print_path,
+                 "Write a printable sheet (SVG, A4) of --codes instead");
+  app.add_option("--codes", codes_text, "--print: codes, e.g. 0-11 or 3,5,8");
+  app.add_option(
+      "--side_mm", side_mm, "--print: side of a marker's black square, mm");
+  app.add_option("--num_threads", num_threads, "-1 = all cores");
+  app.add_option(
+      "--report_path", report_path, "Write the report (per image) as JSON");
+  app.add_option("--overwrite", overwrite, "Replace existing output files");
+  app.add_option("--log_path",
+                 log_path,
+                 "Log file (default <workspace>/logs/targets.log)");
+  if (!command.Parse(argc, argv)) return 0;
+  options.Check();
+  if (!print_path.empty()) {
+    CheckOutputPath(print_path, overwrite);
+    const std::vector<int> codes = ParseCodes(codes_text);
+    WriteCodedTargetSheet(options, codes, side_mm, print_path);
+    command.PrintSummary(StrCat(codes.size(),
+                                " targets of ",
+                                side_mm,
+                                " mm (",
+                                options.dictionary,
+                                ") -> ",
+                                print_path));
+    return 0;
+  }
+  if (database_path.empty() || image_path.empty() || output_path.empty()) {
+    ThrowInputError(
+        "--database_path, --image_path and --output_path are needed (or "
+        "--print)");
+  }
+  CheckFileExists(database_path, "--database_path");
+  CheckDirectoryExists(image_path, "--image_path");
+  CheckOutputPath(output_path, overwrite);
+  if (!report_path.empty()) CheckOutputPath(report_path, overwrite);
+  if (log_path.empty()) {
+    log_path = WorkspaceLogPath(WorkspaceOfStageFile(database_path), "targets");
+  }
+  command.StartLog(log_path);
+
+  const CodedTargetSummary summary =
+      FindCodedTargets(database_path, image_path, options, num_threads);
+  WriteImageMeasurements(output_path, summary.measurements);
+  if (!report_path.empty()) {
+    WriteFileAtomically(report_path,
+                        ReportToJson(summary, options).dump(2) + "\n");
+  }
+  command.PrintSummary(summary.Summary() + "\n  -> " + output_path);
+  return 0;
+}
+
+}  // namespace bayon
