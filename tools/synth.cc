@@ -114,6 +114,14 @@ int RunSynth(int argc, char** argv) {
   app.add_option("--num_tiers",
                  tower.tower.num_tiers,
                  "tower scene: tiers with four faces each");
+  app.add_option("--coded_targets",
+                 tower.tower.num_coded_targets,
+                 "tower scene: coded targets (bayon targets' default "
+                 "dictionary, codes 0 to N - 1) on the walls and platform; "
+                 "their truth in gt/control");
+  app.add_option("--coded_target_side_m",
+                 tower.tower.coded_target_side_m,
+                 "tower scene: side of a coded target's black square");
   app.add_option("--mesh_spacing_m",
                  tower.tower.mesh_spacing_m,
                  "tower scene: vertex spacing of the true surface");

@@ -4,6 +4,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/parallel.h"
 #include "ext/synth/tower_noise.h"
+#include "ext/targets/coded_targets.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -50,6 +51,17 @@ void TowerOptions::Check() const {
               "bar_target_distance_m",
               "in [0.3, 3]",
               bar_target_distance_m);
+  // The default dictionary's codes (aruco_4x4_50).
+  CheckOption(num_coded_targets >= 0 &&
+                  num_coded_targets <= CodedTargetDictionarySize(
+                                           CodedTargetOptions().dictionary),
+              "num_coded_targets",
+              "in [0, the number of codes, 50]",
+              num_coded_targets);
+  CheckOption(coded_target_side_m >= 0.05 && coded_target_side_m <= 0.5,
+              "coded_target_side_m",
+              "in [0.05, 0.5]",
+              coded_target_side_m);
 }
 
 namespace {
@@ -365,6 +377,7 @@ class TowerBuilder {
   void AddPrismWalls(const Prism& prism, double* perimeter0);
   void AddRing(const Prism& lower, const Prism& upper);
   void PlanTargets();
+  void PlanCodedTargets();
   void PackCharts(int* atlas_width, int* atlas_height);
   double GeometricDisplacement(const Patch& patch, double s, double t) const;
   double FineDisplacement(const Patch& patch, double s, double t) const;
@@ -618,6 +631,85 @@ void TowerBuilder::PlanTargets() {
     target.disc_radius_m = 0.035;
     target.plate_half_size_m = 0.07;
     target.on_bar = true;
+    targets_.push_back(target);
+  }
+  PlanCodedTargets();
+}
+
+// Spots for coded targets: on every vertical wall of the tower and the
+// platform, a grid 0.6 m apart of plates clear of the patch's faded edges,
+// its carved face and the control plates; codes 0, 1, ... go to spots spread
+// evenly over that list.
+void TowerBuilder::PlanCodedTargets() {
+  if (options_.num_coded_targets == 0) return;
+  const CodedTargetOptions coded;
+  const int cells = CodedTargetCells(coded.dictionary) + 2;
+  const double half = 0.5 * options_.coded_target_side_m * (cells + 2) / cells;
+  constexpr double kClearance = 0.05, kStep = 0.6;
+  // Evenly spaced values from lo to hi, centred where only one fits.
+  const auto spaced = [](double lo, double hi) {
+    std::vector<double> values;
+    if (hi < lo) return values;
+    const int n = static_cast<int>((hi - lo) / kStep) + 1;
+    const double first = lo + 0.5 * ((hi - lo) - (n - 1) * kStep);
+    for (int i = 0; i < n; ++i) values.push_back(first + i * kStep);
+    return values;
+  };
+  struct Spot {
+    size_t patch;
+    double u, v;
+  };
+  std::vector<Spot> spots;
+  for (size_t p = 0; p < patches_.size(); ++p) {
+    const Patch& patch = patches_[p];
+    if ((patch.kind != Kind::kWall && patch.kind != Kind::kPlatformWall) ||
+        !patch.IsVertical()) {
+      continue;
+    }
+    const double margin = patch.edge_margin + half;
+    for (double v : spaced(margin, patch.len_t - margin)) {
+      for (double u : spaced(margin, patch.len_s - margin)) {
+        const FaceRelief& face = patch.face;
+        if (face.present &&
+            std::abs(u - face.center_u) < face.half_width + half + kClearance &&
+            std::abs(v - face.center_v) <
+                face.half_height + half + kClearance) {
+          continue;
+        }
+        bool clear = true;
+        for (const FlatSite& site : patch.flat_sites) {
+          clear = clear && std::hypot(u - site.u, v - site.v) >=
+                               site.radius + half * std::sqrt(2.0) + kClearance;
+        }
+        if (clear) spots.push_back({p, u, v});
+      }
+    }
+  }
+  const int n = options_.num_coded_targets;
+  if (n > static_cast<int>(spots.size())) {
+    ThrowInputError("num_coded_targets: the tower has room for ",
+                    spots.size(),
+                    " coded targets of ",
+                    options_.coded_target_side_m,
+                    " m, not ",
+                    n);
+  }
+  for (int code = 0; code < n; ++code) {
+    const Spot& spot = spots[static_cast<size_t>(
+        (code + 0.5) * static_cast<double>(spots.size()) / n)];
+    Patch& patch = patches_[spot.patch];
+    FlatSite site;
+    site.u = spot.u;
+    site.v = spot.v;
+    site.radius = half * std::sqrt(2.0) + 0.01;
+    patch.flat_sites.push_back(site);
+    ControlTarget target;
+    target.name = StrCat(coded.name_prefix, code);
+    target.normal = patch.normal;
+    target.center = patch.Base(spot.u / patch.len_s, spot.v / patch.len_t) +
+                    0.003 * patch.normal;
+    target.plate_half_size_m = half;
+    target.code = code;
     targets_.push_back(target);
   }
 }
@@ -1126,8 +1218,27 @@ void TowerBuilder::AddTargetPlates(TowerModel* model, cv::Mat* atlas) {
     const ControlTarget& target = targets_[k];
     const Chart& chart = target_charts_[k];
     // Black plate, white disc; anti-aliased by 8 x 8 samples per texel so
-    // that the disc's centre of gravity is its centre.
+    // that the disc's centre of gravity is its centre. A coded target: its
+    // marker (white margin, black border, the code's cells; chart row 0 at
+    // the top), anti-aliased alike so that its edges lie where they are.
     const double texel = 2 * target.plate_half_size_m / chart.w;
+    cv::Mat pattern;
+    if (target.code >= 0) {
+      pattern =
+          CodedTargetPattern(CodedTargetOptions().dictionary, target.code);
+    }
+    const double cell = 2 * target.plate_half_size_m / (pattern.cols + 2);
+    const auto white = [&](double x, double y) {
+      if (pattern.empty()) return std::hypot(x, y) < target.disc_radius_m;
+      const int c =
+          static_cast<int>(std::floor((x + target.plate_half_size_m) / cell)) -
+          1;
+      const int r =
+          static_cast<int>(std::floor((y + target.plate_half_size_m) / cell)) -
+          1;
+      return c < 0 || r < 0 || c >= pattern.cols || r >= pattern.rows ||
+             pattern.at<uint8_t>(r, c) != 0;
+    };
     for (int j = 0; j < chart.h; ++j) {
       for (int i = 0; i < chart.w; ++i) {
         int inside = 0;
@@ -1137,7 +1248,7 @@ void TowerBuilder::AddTargetPlates(TowerModel* model, cv::Mat* atlas) {
                 (i + (a + 0.5) / 8) * texel - target.plate_half_size_m;
             const double y =
                 (j + (b + 0.5) / 8) * texel - target.plate_half_size_m;
-            inside += std::hypot(x, y) < target.disc_radius_m;
+            inside += white(x, y);
           }
         }
         const double value = 0.03 + (0.85 - 0.03) * inside / 64.0;

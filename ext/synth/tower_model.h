@@ -22,6 +22,9 @@
 // evaluation is the mesh; the texture is part of the truth for texture
 // evaluation.
 //
+// Coded targets (num_coded_targets): plates showing a coded marker, drawn
+// unlit like the control plates, named as bayon targets names them.
+//
 // Signalised control: square black target plates with a white disc, 3 mm in
 // front of flat (undisplaced) spots of walls and platform, and two on a
 // vertical levelling bar (a striped staff standing on the ground), whose
@@ -63,6 +66,11 @@ struct TowerOptions {
   double ground_size_m = 40.0;
   // Levelling bar: distance between its two targets.
   double bar_target_distance_m = 1.5;
+  // Coded targets (ext/targets/coded_targets.h, the default dictionary) on
+  // flat spots of the walls and the platform, codes 0, 1, ..., spread
+  // evenly over the spots that take one; the black square's side.
+  int num_coded_targets = 0;
+  double coded_target_side_m = 0.2;
   uint32_t seed = 1;
   void Check() const;
 };
@@ -74,6 +82,9 @@ struct ControlTarget {
   double disc_radius_m = 0;
   double plate_half_size_m = 0;
   bool on_bar = false;  // a levelling bar target
+  // A coded target's code (its plate shows the code's marker with a white
+  // margin of one cell, centre = the marker's centre); -1: a disc target.
+  int code = -1;
 };
 
 struct TowerModel {

@@ -3,10 +3,12 @@
 
 #include "ext/core/errors.h"
 #include "ext/core/parallel.h"
+#include "ext/targets/coded_targets.h"
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -411,19 +413,52 @@ std::vector<ImageMeasurement> VisibleTargets(const TowerScene& scene,
       const Eigen::Vector2d xy = station.frame->FrameFromPixel(pixel);
       if (!scene.frame_window_mm->contains(xy)) continue;
     }
-    // The whole disc and a rim of black plate must be unoccluded.
     const Eigen::Vector3d right =
         Eigen::Vector3d::UnitZ().cross(target.normal).normalized();
     const Eigen::Vector3d up = target.normal.cross(right);
     bool visible = true;
-    for (int a = 0; a < 12 && visible; ++a) {
-      const double angle = 2 * M_PI * a / 12;
-      const double radius =
-          0.5 * (target.disc_radius_m + target.plate_half_size_m);
-      Eigen::Vector2d rim;
-      visible = on_plate(target.center + radius * (std::cos(angle) * right +
-                                                   std::sin(angle) * up),
-                         &rim);
+    if (target.code < 0) {
+      // The whole disc and a rim of black plate must be unoccluded.
+      for (int a = 0; a < 12 && visible; ++a) {
+        const double angle = 2 * M_PI * a / 12;
+        const double radius =
+            0.5 * (target.disc_radius_m + target.plate_half_size_m);
+        Eigen::Vector2d rim;
+        visible = on_plate(target.center + radius * (std::cos(angle) * right +
+                                                     std::sin(angle) * up),
+                           &rim);
+      }
+    } else {
+      // A coded target: the marker's corners and the middles of its sides,
+      // half a cell out into the white margin, must be unoccluded, and each
+      // side at least min_side_px long in the photograph (smaller markers
+      // cannot be decoded).
+      const CodedTargetOptions coded;
+      const int cells = CodedTargetCells(coded.dictionary) + 2;
+      const double reach = target.plate_half_size_m * (cells + 1) / (cells + 2);
+      for (int sx = -1; sx <= 1; ++sx) {
+        for (int sy = -1; sy <= 1; ++sy) {
+          Eigen::Vector2d at;
+          visible =
+              visible &&
+              on_plate(target.center + reach * (sx * right + sy * up), &at);
+        }
+      }
+      std::array<Eigen::Vector2d, 4> corners;
+      const double side = target.plate_half_size_m * cells / (cells + 2);
+      for (int c = 0; c < 4 && visible; ++c) {
+        const int sx = c == 0 || c == 3 ? -1 : 1;
+        const int sy = c < 2 ? 1 : -1;
+        visible = scene.camera.ImgFromCam(
+            station.cam_from_world *
+                (target.center + side * (sx * right + sy * up)),
+            &corners[c],
+            frame);
+      }
+      for (int c = 0; c < 4 && visible; ++c) {
+        visible =
+            (corners[(c + 1) % 4] - corners[c]).norm() >= coded.min_side_px;
+      }
     }
     if (!visible) continue;
     ImageMeasurement measurement;

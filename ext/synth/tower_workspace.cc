@@ -20,6 +20,7 @@
 #include <future>
 #include <map>
 #include <random>
+#include <set>
 
 namespace fs = std::filesystem;
 
@@ -208,12 +209,19 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
   std::mt19937 rng(options.seed * 31337u + 1u);
   std::normal_distribution<double> gauss(0, 1);
   int number = 0;
+  std::set<std::string> coded;
   for (const ControlTarget& target : scene.model.targets) {
     ControlPoint point;
     point.name = target.name;
     point.xyz = target.center;
     points.push_back(point);
     if (target.on_bar) continue;  // the bar gives scale and vertical only
+    // Coded targets are found by `bayon targets`, not given: their truth
+    // stays in gt/control.
+    if (target.code >= 0) {
+      coded.insert(target.name);
+      continue;
+    }
     ControlPoint user = point;
     user.sigma.setConstant(options.control_sigma_m);
     user.xyz += options.control_sigma_m * RandomVector<3>(gauss, rng);
@@ -221,8 +229,10 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
                                   : ControlPointType::kControl;
     user_points.push_back(user);
   }
-  std::vector<ImageMeasurement> user_observations = observations;
-  for (ImageMeasurement& m : user_observations) {
+  std::vector<ImageMeasurement> user_observations;
+  for (const ImageMeasurement& truth : observations) {
+    if (coded.count(truth.point_name) > 0) continue;
+    ImageMeasurement& m = user_observations.emplace_back(truth);
     m.xy += options.control_sigma_px * RandomVector<2>(gauss, rng);
     m.sigma_px = options.control_sigma_px;
   }
