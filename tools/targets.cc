@@ -6,55 +6,7 @@
 #include "tools/command.h"
 #include "tools/commands.h"
 
-#include <nlohmann/json.hpp>
-
 namespace bayon {
-namespace {
-
-nlohmann::ordered_json ReportToJson(const CodedTargetSummary& summary,
-                                    const CodedTargetOptions& options) {
-  nlohmann::ordered_json json;
-  json["dictionary"] = options.dictionary;
-  json["num_targets"] = summary.num_targets;
-  json["num_measurements"] = summary.measurements.size();
-  json["num_refused"] = summary.num_refused;
-  json["median_sigma_px"] = summary.median_sigma_px;
-  json["seconds"] = summary.seconds;
-  json["images"] = nlohmann::ordered_json::array();
-  for (const CodedTargetImageReport& image : summary.images) {
-    json["images"].push_back({{"name", image.image_name},
-                              {"num_decoded", image.detection.num_decoded},
-                              {"num_measured", image.detection.num_measured},
-                              {"refused", image.detection.refused}});
-  }
-  return json;
-}
-
-// "0-19" or "1,5,7" (or both mixed) into codes.
-std::vector<int> ParseCodes(const std::string& text) {
-  std::vector<int> codes;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t end = std::min(text.find(',', start), text.size());
-    const std::string item = text.substr(start, end - start);
-    const size_t dash = item.find('-');
-    try {
-      size_t used = 0;
-      const int first = std::stoi(item, &used);
-      const int last = dash == std::string::npos
-                           ? first
-                           : std::stoi(item.substr(dash + 1), &used);
-      if (last < first) throw std::invalid_argument(item);
-      for (int code = first; code <= last; ++code) codes.push_back(code);
-    } catch (const std::logic_error&) {
-      ThrowInputError("--codes: '", item, "' is not a code or a range a-b");
-    }
-    start = end + 1;
-  }
-  return codes;
-}
-
-}  // namespace
 
 int RunTargets(int argc, char** argv) {
   std::string database_path, image_path, output_path, report_path, log_path;
@@ -111,7 +63,7 @@ int RunTargets(int argc, char** argv) {
   options.Check();
   if (!print_path.empty()) {
     CheckOutputPath(print_path, overwrite);
-    const std::vector<int> codes = ParseCodes(codes_text);
+    const std::vector<int> codes = ParseCodedTargetCodes(codes_text);
     WriteCodedTargetSheet(options, codes, side_mm, print_path);
     command.PrintSummary(StrCat(codes.size(),
                                 " targets of ",
@@ -141,7 +93,7 @@ int RunTargets(int argc, char** argv) {
   WriteImageMeasurements(output_path, summary.measurements);
   if (!report_path.empty()) {
     WriteFileAtomically(report_path,
-                        ReportToJson(summary, options).dump(2) + "\n");
+                        CodedTargetReportJson(summary, options).dump(2) + "\n");
   }
   command.PrintSummary(summary.Summary() + "\n  -> " + output_path);
   return 0;

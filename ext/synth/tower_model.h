@@ -97,7 +97,8 @@ struct TowerModel {
   // The texture atlas for mesh.face_texcoords: linear reflectance (albedo)
   // scaled to 0..255, BGR.
   cv::Mat texture;
-  std::vector<ControlTarget> targets;  // control points first, bar last
+  // Control points first, then the bar's two, then the coded targets.
+  std::vector<ControlTarget> targets;
   // Names of the levelling bar's lower and upper target.
   std::string bar_bottom_name;
   std::string bar_top_name;

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
+#include <string>
 
 namespace bayon {
 namespace {
@@ -95,6 +97,55 @@ TEST(TowerModel, TargetsSitOnFlatSpots) {
   const ControlTarget& b2 = model.targets.back();
   EXPECT_NEAR((b2.center - b1.center).norm(), 1.5, 1e-12);
   EXPECT_NEAR((b2.center - b1.center).normalized().z(), 1.0, 1e-12);
+}
+
+// Coded targets: codes 0..N-1 after the bar, each on a flat spot of its
+// own, clear of every other plate.
+TEST(TowerModel, CodedTargetsSitOnFlatSpotsOfTheirOwn) {
+  TowerOptions options = CoarseTower();
+  options.num_coded_targets = 12;
+  const TowerModel model = BuildTower(options);
+  const TowerModel plain = BuildTower(CoarseTower());
+  ASSERT_EQ(model.targets.size(), plain.targets.size() + 12);
+  for (size_t k = 0; k < model.targets.size(); ++k) {
+    const ControlTarget& target = model.targets[k];
+    if (k < plain.targets.size()) {
+      EXPECT_EQ(target.code, -1);
+      EXPECT_EQ(target.center, plain.targets[k].center) << target.name;
+      continue;
+    }
+    const int code = static_cast<int>(k - plain.targets.size());
+    EXPECT_EQ(target.code, code);
+    EXPECT_EQ(target.name, "CT" + std::to_string(code));
+    EXPECT_LT(std::abs(target.normal.z()), 1e-9);  // on a wall
+    // The wall behind the plate is flat, 3 mm behind it.
+    int near = 0;
+    for (size_t f = 0; f < model.num_object_faces; ++f) {
+      for (int c = 0; c < 3; ++c) {
+        const Eigen::Vector3d d =
+            model.mesh.vertices.positions[model.mesh.faces[f][c]] -
+            target.center;
+        if (std::abs(target.normal.dot(d)) > 0.1 ||
+            (d - target.normal.dot(d) * target.normal).norm() > 0.1) {
+          continue;
+        }
+        EXPECT_NEAR(target.normal.dot(d), -0.003, 1e-9) << target.name;
+        ++near;
+      }
+    }
+    EXPECT_GT(near, 0) << target.name;
+    for (size_t j = 0; j < k; ++j) {
+      const ControlTarget& other = model.targets[j];
+      EXPECT_GT(
+          (target.center - other.center).norm(),
+          (target.plate_half_size_m + other.plate_half_size_m) * std::sqrt(2.0))
+          << target.name << " and " << other.name;
+    }
+  }
+  // Plates after the object's faces: two per target.
+  EXPECT_EQ(model.num_target_faces, 2 * model.targets.size());
+  options.num_coded_targets = 51;
+  EXPECT_THROW(BuildTower(options), InputError);
 }
 
 TEST(TowerModel, RejectsBadOptions) {

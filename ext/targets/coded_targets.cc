@@ -14,6 +14,7 @@
 #include <functional>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 namespace bayon {
 namespace {
@@ -282,6 +283,29 @@ int CodedTargetDictionarySize(const std::string& dictionary) {
 
 int CodedTargetCells(const std::string& dictionary) {
   return FindDictionary(dictionary).cells;
+}
+
+std::vector<int> ParseCodedTargetCodes(const std::string& text) {
+  std::vector<int> codes;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t end = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, end - start);
+    const size_t dash = item.find('-');
+    try {
+      size_t used = 0;
+      const int first = std::stoi(item, &used);
+      const int last = dash == std::string::npos
+                           ? first
+                           : std::stoi(item.substr(dash + 1), &used);
+      if (last < first) throw std::invalid_argument(item);
+      for (int code = first; code <= last; ++code) codes.push_back(code);
+    } catch (const std::logic_error&) {
+      ThrowInputError("--codes: '", item, "' is not a code or a range a-b");
+    }
+    start = end + 1;
+  }
+  return codes;
 }
 
 cv::Mat CodedTargetPattern(const std::string& dictionary, int code) {

@@ -89,6 +89,10 @@ std::vector<CodedTarget> DetectCodedTargets(const cv::Mat& image,
                                             const std::string& what,
                                             CodedTargetReport* report);
 
+// "0-11", "3,5,8" or both mixed ("0-3,9"): the codes of a sheet;
+// InputError naming the item that is neither a code nor a range a-b.
+std::vector<int> ParseCodedTargetCodes(const std::string& text);
+
 // The marker of `code` as printed: (cells + 2) x (cells + 2) values, 0 for
 // black and 255 for white, the black border included.
 cv::Mat CodedTargetPattern(const std::string& dictionary, int code);

@@ -240,6 +240,9 @@ TEST(CodedTargets, RefusesBadOptionsAndImages) {
   EXPECT_THROW(DetectCodedTargets(floating, options, "x.tif", nullptr),
                InputError);
   EXPECT_THROW(CodedTargetPattern("aruco_4x4_50", 50), InputError);
+  EXPECT_EQ(ParseCodedTargetCodes("0-3,9"), std::vector<int>({0, 1, 2, 3, 9}));
+  EXPECT_THROW(ParseCodedTargetCodes("4-2"), InputError);
+  EXPECT_THROW(ParseCodedTargetCodes("a"), InputError);
   EXPECT_EQ(CodedTargetDictionarySize("apriltag_36h11"), 587);
 }
 

@@ -99,4 +99,23 @@ CodedTargetSummary FindCodedTargets(const std::string& database_path,
   return summary;
 }
 
+nlohmann::ordered_json CodedTargetReportJson(
+    const CodedTargetSummary& summary, const CodedTargetOptions& options) {
+  nlohmann::ordered_json json;
+  json["dictionary"] = options.dictionary;
+  json["num_targets"] = summary.num_targets;
+  json["num_measurements"] = summary.measurements.size();
+  json["num_refused"] = summary.num_refused;
+  json["median_sigma_px"] = summary.median_sigma_px;
+  json["seconds"] = summary.seconds;
+  json["images"] = nlohmann::ordered_json::array();
+  for (const CodedTargetImageReport& image : summary.images) {
+    json["images"].push_back({{"name", image.image_name},
+                              {"num_decoded", image.detection.num_decoded},
+                              {"num_measured", image.detection.num_measured},
+                              {"refused", image.detection.refused}});
+  }
+  return json;
+}
+
 }  // namespace bayon

@@ -14,6 +14,8 @@
 #include "ext/colmap/control_io.h"
 #include "ext/targets/coded_targets.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -43,5 +45,10 @@ CodedTargetSummary FindCodedTargets(const std::string& database_path,
                                     const std::string& image_path,
                                     const CodedTargetOptions& options,
                                     int num_threads);
+
+// The report as `bayon targets --report_path` writes it: the totals and,
+// per photograph, what was decoded, measured and refused (with why).
+nlohmann::ordered_json CodedTargetReportJson(const CodedTargetSummary& summary,
+                                             const CodedTargetOptions& options);
 
 }  // namespace bayon
