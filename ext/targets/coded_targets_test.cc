@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -158,7 +159,7 @@ TEST(CodedTargets, FindsEveryMarkerWithItsCodeAndCentreToATenthPixel) {
   RecordProperty("stated_rms_px", std::to_string(stated));
   std::cout << num_markers << " markers: centre error RMS " << rms
             << " px, worst " << worst << " px; stated " << stated << " px\n";
-  // Measured: 0.012 px, stated 0.028 px. The stated sigma errs on the
+  // Measured: 0.013 px, stated 0.032 px. The stated sigma errs on the
   // safe side here: each edge point's centroid moves with the pixel phase
   // along its side, which the line's scatter counts as noise and the line
   // itself averages out. (On the rendered 1800 x 1200 tower it errs the
@@ -184,42 +185,52 @@ TEST(CodedTargets, ACodeSeenTwiceNamesThePhotograph) {
   }
 }
 
-// A side covered in part is no straight edge: the target is left out, with
-// the reason, and the others are measured.
-TEST(CodedTargets, APartlyCoveredMarkerIsLeftOutWithItsReason) {
+// A side covered in part: the occluder's edge points are left out of the
+// side's line, so that the target is measured from the rest about as
+// precisely as the uncovered one. (Were more than half of a side covered,
+// the target would be left out, with its reason.)
+TEST(CodedTargets, APartlyCoveredSideDoesNotMoveTheCentre) {
   const CodedTargetOptions options;
-  cv::Mat photo(480, 640, CV_8U, cv::Scalar(128));
-  RenderMarker(MarkerDrawing(options.dictionary, 5),
-               60,
-               0,
-               0,
-               0,
-               Eigen::Vector2d(160, 240),
-               &photo);
-  RenderMarker(MarkerDrawing(options.dictionary, 6),
-               60,
-               0,
-               0,
-               0,
-               Eigen::Vector2d(480, 240),
-               &photo);
-  // A dark twig across the middle of marker 5's upper side, inside and out.
-  cv::line(photo, cv::Point(150, 195), cv::Point(166, 220), cv::Scalar(0), 3);
-  CodedTargetReport report;
-  const std::vector<CodedTarget> targets =
-      DetectCodedTargets(photo, options, "photo.png", &report);
-  std::string codes;
-  for (const CodedTarget& target : targets) codes += target.name + " ";
-  if (report.num_decoded == 2) {
-    ASSERT_EQ(targets.size(), 1u) << codes;
-    EXPECT_EQ(targets[0].name, "CT6");
-    ASSERT_EQ(report.refused.size(), 1u);
-    EXPECT_THAT(report.refused[0], HasSubstr("CT5: side"));
-  } else {
-    // OpenCV itself may not decode the covered one; then it is not there.
-    ASSERT_EQ(report.num_decoded, 1);
-    ASSERT_EQ(targets.size(), 1u);
-    EXPECT_EQ(targets[0].name, "CT6");
+  // A twig across the side, and a dark blot of two sizes on its edge.
+  for (int occluder = 0; occluder < 3; ++occluder) {
+    cv::Mat photo(480, 640, CV_8U, cv::Scalar(128));
+    const Eigen::Vector2d truth5 =
+        RenderMarker(MarkerDrawing(options.dictionary, 5),
+                     60,
+                     10,
+                     5,
+                     0,
+                     Eigen::Vector2d(160, 240),
+                     &photo);
+    const Eigen::Vector2d truth6 =
+        RenderMarker(MarkerDrawing(options.dictionary, 6),
+                     60,
+                     10,
+                     5,
+                     0,
+                     Eigen::Vector2d(480, 240),
+                     &photo);
+    if (occluder == 0) {
+      cv::line(photo, cv::Point(150, 195), cv::Point(166, 220), 0, 2);
+    } else {
+      cv::circle(photo, cv::Point(165, 209), 2 * occluder, 0, cv::FILLED);
+    }
+    CodedTargetReport report;
+    const std::vector<CodedTarget> targets =
+        DetectCodedTargets(photo, options, "photo.png", &report);
+    std::map<std::string, Eigen::Vector2d> centre;
+    for (const CodedTarget& target : targets) {
+      centre[target.name] = target.centre;
+    }
+    ASSERT_TRUE(centre.count("CT6"));
+    EXPECT_LT((centre["CT6"] - truth6).norm(), 0.1);
+    // Measured: 0.0034, 0.0027 and 0.0023 px from the truth; with every
+    // edge point in the lines, 0.0076 px, refused ("side 1 is not
+    // straight") and 0.057 px.
+    ASSERT_TRUE(centre.count("CT5"))
+        << occluder << ": "
+        << (report.refused.empty() ? "not decoded" : report.refused[0]);
+    EXPECT_LT((centre["CT5"] - truth5).norm(), 0.02) << occluder;
   }
 }
 
