@@ -264,6 +264,53 @@ TEST(TiePoints, ManualMeasurementsAreMergedAndCheckedByLine) {
   };
   expect_refused("M2 nosuch.png 1 2\n", "nosuch.png");     // unknown image
   expect_refused("# header\nM3 image_001.png 1\n", ":2");  // line 2
+
+  // Coded targets (`bayon targets`' output) beside the manual points: named
+  // points of source "target"; a name in both files is refused.
+  {
+    std::ofstream out(dir + "/targets.txt");
+    out << "CT4 image_001.png 300.5 310.25 0.02\n"
+           "CT4 image_002.png 320.5 305.75 0.03\n";
+  }
+  result = testing::RunBayon({"tiepoints",
+                              "--database_path",
+                              db,
+                              "--image_path",
+                              images,
+                              "--manual_path",
+                              dir + "/manual.txt",
+                              "--targets_path",
+                              dir + "/targets.txt"});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("1 manual points, 1 coded targets"),
+            std::string::npos)
+      << result.output;
+  const std::vector<TiePointRecord> with_targets = ReadTiePoints(&database);
+  const auto target = std::find_if(
+      with_targets.begin(), with_targets.end(), [](const TiePointRecord& p) {
+        return p.source == "target";
+      });
+  ASSERT_NE(target, with_targets.end());
+  EXPECT_EQ(target->name, "CT4");
+  ASSERT_EQ(target->observations.size(), 2u);
+  EXPECT_NEAR(target->observations[1].covariance(0, 0), 0.0009, 1e-12);
+  {
+    std::ofstream out(dir + "/clash.txt");
+    out << "M1 image_001.png 300.5 310.25 0.02\n";
+  }
+  const testing::CommandResult clash = testing::RunBayon({"tiepoints",
+                                                          "--database_path",
+                                                          db,
+                                                          "--image_path",
+                                                          images,
+                                                          "--manual_path",
+                                                          dir + "/manual.txt",
+                                                          "--targets_path",
+                                                          dir + "/clash.txt"});
+  EXPECT_EQ(clash.exit_code, 2) << clash.output;
+  EXPECT_NE(clash.LastLine().find("M1 is also a manual point"),
+            std::string::npos)
+      << clash.LastLine();
 }
 
 TEST(TiePoints, RefusesADatabaseWithoutSurfaces) {

@@ -22,6 +22,7 @@ Json SummaryToJson(const TiePointSummary& summary) {
   json["num_followed"] = summary.num_followed;
   json["num_points"] = summary.num_points;
   json["num_manual_points"] = summary.num_manual_points;
+  json["num_target_points"] = summary.num_target_points;
   json["num_observations"] = summary.num_observations;
   json["mean_images_per_point"] = summary.mean_images_per_point;
   json["points_by_images"] = summary.points_by_images;
@@ -132,6 +133,10 @@ int RunTiePoints(int argc, char** argv) {
   app.add_option("--manual_sigma_px",
                  options.manual_sigma_px,
                  "Sigma of manual measurements without one, pixels");
+  app.add_option("--targets_path",
+                 options.targets_path,
+                 "Coded targets' measurements (bayon targets --output_path): "
+                 "named tie points beside the manual ones");
   app.add_option("--grid_cols", options.grid_cols, "Candidate grid columns");
   app.add_option("--grid_rows", options.grid_rows, "Candidate grid rows");
   app.add_option("--candidates_per_cell",
@@ -224,6 +229,9 @@ int RunTiePoints(int argc, char** argv) {
              summary.num_manual_points > 0
                  ? StrCat(", ", summary.num_manual_points, " manual points")
                  : std::string(),
+             summary.num_target_points > 0
+                 ? StrCat(", ", summary.num_target_points, " coded targets")
+                 : std::string(),
              colmap_output_path.empty() ? std::string()
                                         : StrCat(", COLMAP export of ",
                                                  summary.colmap_pairs,
@@ -233,7 +241,8 @@ int RunTiePoints(int argc, char** argv) {
              summary.seconds,
              " s -> ",
              database_path));
-  return summary.num_points + summary.num_manual_points > 0 ? 0 : 1;
+  const int num_named = summary.num_manual_points + summary.num_target_points;
+  return summary.num_points + num_named > 0 ? 0 : 1;
 }
 
 }  // namespace bayon

@@ -9,14 +9,15 @@
 // points, at most one per image, in COLMAP pixel coordinates (the centre of
 // the upper-left pixel is (0.5, 0.5)). `source` says where the point came
 // from: "alsm" (automatic: the reference observation is an interest point,
-// every other one matched to it by least-squares matching) or "manual" (the
-// user's measurements file); a manual point keeps the user's name.
+// every other one matched to it by least-squares matching), "manual" (the
+// user's measurements file) or "target" (a coded target, measured by `bayon
+// targets`); manual points and targets keep their names.
 //
 // Each observation carries the 2 x 2 covariance of its position (pixels^2):
 // for matched observations the least-squares covariance sigma0^2 N^-1 of
 // the shift, for the reference observation the one its own template would
 // give (the same patch, matched against itself; the precision of a point
-// measured in a single image), for manual ones sigma^2 I.
+// measured in a single image), for manual ones and targets sigma^2 I.
 //
 // `bayon tiepoints` replaces all rows in one transaction, so readers always
 // see one run's result.
@@ -43,8 +44,8 @@ struct TieObservation {
 
 struct TiePointRecord {
   int64_t point_id = 0;  // 1, 2, ... in the order written
-  std::string name;      // the user's name (manual), else empty
-  std::string source;    // "alsm" or "manual"
+  std::string name;      // manual points' and targets' names, else empty
+  std::string source;    // "alsm", "manual" or "target"
   std::vector<TieObservation> observations;  // image_id order
 };
 

@@ -135,7 +135,7 @@ struct Input {
   SurfaceMap surfaces;
   // The images each image has a surface into.
   std::map<image_t, std::vector<image_t>> neighbors;
-  std::vector<TiePointRecord> manual;
+  std::vector<TiePointRecord> manual;  // manual_path's, then targets_path's
 };
 
 // One observation being built.
@@ -484,9 +484,11 @@ bool NearAny(const std::vector<Eigen::Vector2d>& points,
   return false;
 }
 
-// The user's measurements as tie points, one per name.
-std::vector<TiePointRecord> ReadManualPoints(
+// Measurements in a file (control_io.h format) as tie points of `source`,
+// one per name.
+std::vector<TiePointRecord> ReadNamedPoints(
     const std::string& path,
+    const std::string& source,
     const std::map<std::string, image_t>& image_ids,
     double default_sigma_px) {
   std::map<std::string, TiePointRecord> by_name;
@@ -502,7 +504,7 @@ std::vector<TiePointRecord> ReadManualPoints(
     }
     TiePointRecord& point = by_name[m.point_name];
     point.name = m.point_name;
-    point.source = "manual";
+    point.source = source;
     TieObservation observation;
     observation.image_id = image->second;
     observation.xy = m.xy;
@@ -549,7 +551,8 @@ Input ReadInput(const std::string& database_path,
   for (const auto& [id, image] : input.images) {
     num_keypoints += image.keypoints.rows();
   }
-  if (options.manual_path.empty() && num_keypoints == 0) {
+  if (options.manual_path.empty() && options.targets_path.empty() &&
+      num_keypoints == 0) {
     ThrowInputError(database_path,
                     ": no keypoints (run `bayon features` first)");
   }
@@ -565,15 +568,37 @@ Input ReadInput(const std::string& database_path,
     }
   }
   summary->num_surfaces = static_cast<int>(input.surfaces.size());
-  if (options.manual_path.empty() && input.surfaces.empty()) {
+  if (options.manual_path.empty() && options.targets_path.empty() &&
+      input.surfaces.empty()) {
     ThrowInputError(database_path,
                     ": no current disparity surfaces (run `bayon relative` "
                     "and `bayon disparity` first)");
   }
   if (!options.manual_path.empty()) {
     CheckFileExists(options.manual_path, "--manual_path");
-    input.manual = ReadManualPoints(
-        options.manual_path, image_ids, options.manual_sigma_px);
+    input.manual = ReadNamedPoints(
+        options.manual_path, "manual", image_ids, options.manual_sigma_px);
+  }
+  if (!options.targets_path.empty()) {
+    CheckFileExists(options.targets_path, "--targets_path");
+    std::set<std::string> manual_names;
+    for (const TiePointRecord& point : input.manual) {
+      manual_names.insert(point.name);
+    }
+    for (TiePointRecord& point : ReadNamedPoints(options.targets_path,
+                                                 "target",
+                                                 image_ids,
+                                                 options.manual_sigma_px)) {
+      if (manual_names.count(point.name) > 0) {
+        ThrowInputError(options.targets_path,
+                        ": target ",
+                        point.name,
+                        " is also a manual point in ",
+                        options.manual_path,
+                        "; one name, one point");
+      }
+      input.manual.push_back(std::move(point));
+    }
   }
   // Images: every one with keypoints and a surface is read.
   std::vector<ExpectedImage> expected;
@@ -737,8 +762,9 @@ TiePointSummary FindTiePoints(const std::string& database_path,
   }
   progress.Finish();
   summary.num_points = static_cast<int>(points.size());
-  summary.num_manual_points = static_cast<int>(input.manual.size());
   for (const TiePointRecord& point : input.manual) {
+    ++(point.source == "target" ? summary.num_target_points
+                                : summary.num_manual_points);
     for (const TieObservation& observation : point.observations) {
       ++reports[observation.image_id].num_observations;
     }

@@ -119,6 +119,10 @@ struct TiePointOptions {
   std::string manual_path;
   // Standard deviation of a manual measurement without its own, pixels.
   double manual_sigma_px = 0.5;
+  // Coded targets measured by `bayon targets` (the same format, every
+  // measurement with its sigma); empty: none. Named tie points of source
+  // "target", beside the manual ones (a name in both is refused).
+  std::string targets_path;
   int num_threads = -1;
   void Check() const;  // throws InputError naming field, value, rule
 };
@@ -155,6 +159,7 @@ struct TiePointSummary {
   int num_followed = 0;  // candidates not already taken
   int num_points = 0;    // kept
   int num_manual_points = 0;
+  int num_target_points = 0;
   int64_t num_observations = 0;
   double mean_images_per_point = 0;
   // Points by number of images (index = images, up to max_images).
