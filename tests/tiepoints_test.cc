@@ -218,15 +218,15 @@ TEST(TiePoints, ManualMeasurementsAreMergedAndCheckedByLine) {
         << "M1 image_001.png 100.5 200.25 0.3\n"
         << "M1 image_002.png 140.0 210.0\n";
   }
-  testing::CommandResult result = testing::RunBayon({"tiepoints",
-                                                     "--database_path",
-                                                     db,
-                                                     "--image_path",
-                                                     images,
-                                                     "--manual_path",
-                                                     dir + "/manual.txt",
-                                                     "--manual_sigma_px",
-                                                     "0.7"});
+  // `bayon tiepoints` on this database and its photographs, with `more`.
+  const auto tiepoints = [&](const std::vector<std::string>& more) {
+    std::vector<std::string> args = {
+        "tiepoints", "--database_path", db, "--image_path", images};
+    args.insert(args.end(), more.begin(), more.end());
+    return testing::RunBayon(args);
+  };
+  testing::CommandResult result = tiepoints(
+      {"--manual_path", dir + "/manual.txt", "--manual_sigma_px", "0.7"});
   ASSERT_EQ(result.exit_code, 0) << result.output;
   Database database(db, Database::Mode::kReadOnly);
   const std::vector<TiePointRecord> points = ReadTiePoints(&database);
@@ -250,13 +250,7 @@ TEST(TiePoints, ManualMeasurementsAreMergedAndCheckedByLine) {
       out << text;
     }
     const testing::CommandResult refused =
-        testing::RunBayon({"tiepoints",
-                           "--database_path",
-                           db,
-                           "--image_path",
-                           images,
-                           "--manual_path",
-                           dir + "/bad.txt"});
+        tiepoints({"--manual_path", dir + "/bad.txt"});
     EXPECT_EQ(refused.exit_code, 2);
     EXPECT_NE(refused.LastLine().find(named), std::string::npos)
         << refused.output;
@@ -267,20 +261,20 @@ TEST(TiePoints, ManualMeasurementsAreMergedAndCheckedByLine) {
 
   // Coded targets (`bayon targets`' output) beside the manual points: named
   // points of source "target"; a name in both files is refused.
-  {
-    std::ofstream out(dir + "/targets.txt");
-    out << "CT4 image_001.png 300.5 310.25 0.02\n"
-           "CT4 image_002.png 320.5 305.75 0.03\n";
-  }
-  result = testing::RunBayon({"tiepoints",
-                              "--database_path",
-                              db,
-                              "--image_path",
-                              images,
-                              "--manual_path",
-                              dir + "/manual.txt",
-                              "--targets_path",
-                              dir + "/targets.txt"});
+  const auto with_targets_file = [&](const std::string& name,
+                                     const std::string& text) {
+    {
+      std::ofstream out(dir + "/" + name);
+      out << text;
+    }
+    return tiepoints({"--manual_path",
+                      dir + "/manual.txt",
+                      "--targets_path",
+                      dir + "/" + name});
+  };
+  result = with_targets_file("targets.txt",
+                             "CT4 image_001.png 300.5 310.25 0.02\n"
+                             "CT4 image_002.png 320.5 305.75 0.03\n");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("1 manual points, 1 coded targets"),
             std::string::npos)
@@ -294,19 +288,8 @@ TEST(TiePoints, ManualMeasurementsAreMergedAndCheckedByLine) {
   EXPECT_EQ(target->name, "CT4");
   ASSERT_EQ(target->observations.size(), 2u);
   EXPECT_NEAR(target->observations[1].covariance(0, 0), 0.0009, 1e-12);
-  {
-    std::ofstream out(dir + "/clash.txt");
-    out << "M1 image_001.png 300.5 310.25 0.02\n";
-  }
-  const testing::CommandResult clash = testing::RunBayon({"tiepoints",
-                                                          "--database_path",
-                                                          db,
-                                                          "--image_path",
-                                                          images,
-                                                          "--manual_path",
-                                                          dir + "/manual.txt",
-                                                          "--targets_path",
-                                                          dir + "/clash.txt"});
+  const testing::CommandResult clash =
+      with_targets_file("clash.txt", "M1 image_001.png 300.5 310.25 0.02\n");
   EXPECT_EQ(clash.exit_code, 2) << clash.output;
   EXPECT_NE(clash.LastLine().find("M1 is also a manual point"),
             std::string::npos)

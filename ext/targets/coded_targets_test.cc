@@ -194,22 +194,18 @@ TEST(CodedTargets, APartlyCoveredSideDoesNotMoveTheCentre) {
   // A twig across the side, and a dark blot of two sizes on its edge.
   for (int occluder = 0; occluder < 3; ++occluder) {
     cv::Mat photo(480, 640, CV_8U, cv::Scalar(128));
-    const Eigen::Vector2d truth5 =
-        RenderMarker(MarkerDrawing(options.dictionary, 5),
-                     60,
-                     10,
-                     5,
-                     0,
-                     Eigen::Vector2d(160, 240),
-                     &photo);
-    const Eigen::Vector2d truth6 =
-        RenderMarker(MarkerDrawing(options.dictionary, 6),
-                     60,
-                     10,
-                     5,
-                     0,
-                     Eigen::Vector2d(480, 240),
-                     &photo);
+    // Codes 5 and 6 side by side, alike.
+    const auto render = [&](int code, double x) {
+      return RenderMarker(MarkerDrawing(options.dictionary, code),
+                          60,
+                          10,
+                          5,
+                          0,
+                          Eigen::Vector2d(x, 240),
+                          &photo);
+    };
+    const Eigen::Vector2d truth5 = render(5, 160);
+    const Eigen::Vector2d truth6 = render(6, 480);
     if (occluder == 0) {
       cv::line(photo, cv::Point(150, 195), cv::Point(166, 220), 0, 2);
     } else {
