@@ -308,10 +308,16 @@ bool MeasureTarget(const cv::Mat& grey,
 
 void CodedTargetOptions::Check() const {
   FindDictionary(dictionary);
-  CheckOption(min_side_px >= 8, "--min_side_px", ">= 8", min_side_px);
-  CheckOption(edge_search_px >= 1, "--edge_search_px", ">= 1", edge_search_px);
   CheckOption(
-      max_line_sigma_px > 0, "--max_line_sigma_px", "> 0", max_line_sigma_px);
+      min_side_px >= 8, "CodedTargetOptions.min_side_px", ">= 8", min_side_px);
+  CheckOption(edge_search_px >= 1,
+              "CodedTargetOptions.edge_search_px",
+              ">= 1",
+              edge_search_px);
+  CheckOption(max_line_sigma_px > 0,
+              "CodedTargetOptions.max_line_sigma_px",
+              "> 0",
+              max_line_sigma_px);
 }
 
 int CodedTargetDictionarySize(const std::string& dictionary) {
@@ -338,7 +344,7 @@ std::vector<int> ParseCodedTargetCodes(const std::string& text) {
       if (last < first) throw std::invalid_argument(item);
       for (int code = first; code <= last; ++code) codes.push_back(code);
     } catch (const std::logic_error&) {
-      ThrowInputError("--codes: '", item, "' is not a code or a range a-b");
+      ThrowInputError("codes: '", item, "' is not a code or a range a-b");
     }
     start = end + 1;
   }
@@ -449,7 +455,7 @@ void WriteCodedTargetSheet(const CodedTargetOptions& options,
                            double side_mm,
                            const std::string& path) {
   options.Check();
-  CheckOption(side_mm > 0, "--side_mm", "> 0", side_mm);
+  CheckOption(side_mm > 0, "side_mm", "> 0", side_mm);
   constexpr double kPageWidth = 210, kPageHeight = 297, kPageMargin = 10;
   const int cells = CodedTargetCells(options.dictionary) + 2;
   const double cell = side_mm / cells;
