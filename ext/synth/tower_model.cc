@@ -709,6 +709,7 @@ void TowerBuilder::PlanCodedTargets() {
     target.center = patch.Base(spot.u / patch.len_s, spot.v / patch.len_t) +
                     0.003 * patch.normal;
     target.plate_half_size_m = half;
+    target.marker_half_size_m = 0.5 * options_.coded_target_side_m;
     target.code = code;
     targets_.push_back(target);
   }

@@ -85,6 +85,7 @@ struct ControlTarget {
   // A coded target's code (its plate shows the code's marker with a white
   // margin of one cell, centre = the marker's centre); -1: a disc target.
   int code = -1;
+  double marker_half_size_m = 0;  // coded: half the black square's side
 };
 
 struct TowerModel {

@@ -433,9 +433,8 @@ std::vector<ImageMeasurement> VisibleTargets(const TowerScene& scene,
       // half a cell out into the white margin, must be unoccluded, and each
       // side at least min_side_px long in the photograph (smaller markers
       // cannot be decoded).
-      const CodedTargetOptions coded;
-      const int cells = CodedTargetCells(coded.dictionary) + 2;
-      const double reach = target.plate_half_size_m * (cells + 1) / (cells + 2);
+      const double half = target.marker_half_size_m;
+      const double reach = 0.5 * (half + target.plate_half_size_m);
       for (int sx = -1; sx <= 1; ++sx) {
         for (int sy = -1; sy <= 1; ++sy) {
           Eigen::Vector2d at;
@@ -445,19 +444,18 @@ std::vector<ImageMeasurement> VisibleTargets(const TowerScene& scene,
         }
       }
       std::array<Eigen::Vector2d, 4> corners;
-      const double side = target.plate_half_size_m * cells / (cells + 2);
       for (int c = 0; c < 4 && visible; ++c) {
         const int sx = c == 0 || c == 3 ? -1 : 1;
         const int sy = c < 2 ? 1 : -1;
         visible = scene.camera.ImgFromCam(
             station.cam_from_world *
-                (target.center + side * (sx * right + sy * up)),
+                (target.center + half * (sx * right + sy * up)),
             &corners[c],
             frame);
       }
       for (int c = 0; c < 4 && visible; ++c) {
-        visible =
-            (corners[(c + 1) % 4] - corners[c]).norm() >= coded.min_side_px;
+        visible = (corners[(c + 1) % 4] - corners[c]).norm() >=
+                  CodedTargetOptions().min_side_px;
       }
     }
     if (!visible) continue;

@@ -12,7 +12,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -286,11 +285,11 @@ bool MeasureTarget(const cv::Mat& grey,
     variances(2 * k) = lines[k].offset_variance;
     variances(2 * k + 1) = lines[k].angle_variance;
     for (int p = 0; p < 2; ++p) {
+      const double offset = p == 0 ? steps[0] : 0,
+                   angle = p == 1 ? steps[1] : 0;
       std::array<EdgeLine, 4> plus = lines, minus = lines;
-      plus[k] =
-          Perturbed(lines[k], p == 0 ? steps[0] : 0, p == 1 ? steps[1] : 0);
-      minus[k] =
-          Perturbed(lines[k], p == 0 ? -steps[0] : 0, p == 1 ? -steps[1] : 0);
+      plus[k] = Perturbed(lines[k], offset, angle);
+      minus[k] = Perturbed(lines[k], -offset, -angle);
       const std::optional<Eigen::Vector2d> a = CentreOf(plus, nullptr);
       const std::optional<Eigen::Vector2d> b = CentreOf(minus, nullptr);
       if (!a || !b) {
