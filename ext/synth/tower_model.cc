@@ -1229,6 +1229,13 @@ void TowerBuilder::AddTargetPlates(TowerModel* model, cv::Mat* atlas) {
           CodedTargetPattern(CodedTargetOptions().dictionary, target.code);
     }
     const double cell = 2 * target.plate_half_size_m / (pattern.cols + 2);
+    // A coded target's white stays below the photographs' white at the
+    // scene's brightest exposure (overcast, about 3): clipped, its edges
+    // would be binarised onto the pixel grid, up to half a pixel from where
+    // they lie, as an over-exposed print is in a real photograph. The disc
+    // targets keep their paper white (a clipped disc keeps its centre).
+    const double white_level = target.code >= 0 ? 0.27 : 0.85;
+    const double black_level = target.code >= 0 ? 0.02 : 0.03;
     const auto white = [&](double x, double y) {
       if (pattern.empty()) return std::hypot(x, y) < target.disc_radius_m;
       const int c =
@@ -1252,7 +1259,8 @@ void TowerBuilder::AddTargetPlates(TowerModel* model, cv::Mat* atlas) {
             inside += white(x, y);
           }
         }
-        const double value = 0.03 + (0.85 - 0.03) * inside / 64.0;
+        const double value =
+            black_level + (white_level - black_level) * inside / 64.0;
         const uint8_t v = cv::saturate_cast<uint8_t>(255 * value);
         atlas->at<cv::Vec3b>(chart.y + j, chart.x + i) = cv::Vec3b(v, v, v);
       }
