@@ -46,6 +46,10 @@ int RunTargets(int argc, char** argv) {
                  options.max_line_sigma_px,
                  "A side whose edge points scatter more is no measurement, "
                  "px");
+  app.add_option("--edge_bias_px",
+                 options.edge_bias_px,
+                 "A side's error that its points' scatter does not show, "
+                 "added to each line's sigma, px");
   app.add_option("--print",
                  print_path,
                  "Write a printable sheet (SVG, A4) of --codes instead");

@@ -282,7 +282,8 @@ bool MeasureTarget(const cv::Mat& grey,
   Eigen::Matrix<double, 8, 1> variances;
   for (int k = 0; k < 4; ++k) {
     const double steps[2] = {1e-3, 1e-5};  // pixels, radians
-    variances(2 * k) = lines[k].offset_variance;
+    variances(2 * k) =
+        lines[k].offset_variance + options.edge_bias_px * options.edge_bias_px;
     variances(2 * k + 1) = lines[k].angle_variance;
     for (int p = 0; p < 2; ++p) {
       const double offset = p == 0 ? steps[0] : 0,
@@ -313,6 +314,10 @@ void CodedTargetOptions::Check() const {
               "CodedTargetOptions.edge_search_px",
               ">= 1",
               edge_search_px);
+  CheckOption(edge_bias_px >= 0,
+              "CodedTargetOptions.edge_bias_px",
+              ">= 0",
+              edge_bias_px);
   CheckOption(max_line_sigma_px > 0,
               "CodedTargetOptions.max_line_sigma_px",
               "> 0",

@@ -112,7 +112,7 @@ void AddNoise(double sigma, uint32_t seed, cv::Mat* photo) {
 // Measured against the truth: markers of 24 to 60 px, tilted up to 60
 // degrees, turned anyhow, under noise of 2 grey values. Every one is found
 // with its code, the centres lie within 0.1 px RMS (the bound) and
-// the stated standard deviations are of the scatter's order.
+// the stated standard deviations do not understate the errors.
 TEST(CodedTargets, FindsEveryMarkerWithItsCodeAndCentreToATenthPixel) {
   const CodedTargetOptions options;
   std::mt19937 random(7);
@@ -159,15 +159,16 @@ TEST(CodedTargets, FindsEveryMarkerWithItsCodeAndCentreToATenthPixel) {
   RecordProperty("stated_rms_px", std::to_string(stated));
   std::cout << num_markers << " markers: centre error RMS " << rms
             << " px, worst " << worst << " px; stated " << stated << " px\n";
-  // Measured: 0.013 px, stated 0.032 px. The stated sigma errs on the
-  // safe side here: each edge point's centroid moves with the pixel phase
-  // along its side, which the line's scatter counts as noise and the line
-  // itself averages out. (On the rendered 1800 x 1200 tower it errs the
-  // other way, a median 0.023 px stated against 0.126 px RMS found: there
-  // the errors are mostly across the short, foreshortened sides.)
+  // Measured: 0.013 px, stated 0.052 px. The scatter of the edge points
+  // alone states 0.032 px here, but on the rendered 1800 x 1200 tower only
+  // a quarter of the true error (0.010 px against 0.038 px): there the
+  // errors are the edge locator's own, shared along a side. The stated
+  // sigma therefore carries edge_bias_px, and errs on the safe side on
+  // these ideal markers; it must not understate the error, nor be so
+  // large that a bundle would throw the targets' precision away.
   EXPECT_LT(rms, 0.1);
-  EXPECT_GT(rms / stated, 0.25);
-  EXPECT_LT(rms / stated, 2.0);
+  EXPECT_LT(rms / stated, 1.5);
+  EXPECT_LT(stated, 0.1);
 }
 
 TEST(CodedTargets, ACodeSeenTwiceNamesThePhotograph) {
