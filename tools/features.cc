@@ -55,6 +55,10 @@ int RunFeatures(int argc, char** argv) {
   app.add_option("--overwrite",
                  options.overwrite,
                  "1: replace existing keypoints (drops their matches)");
+  app.add_option("--targets_path",
+                 options.targets_path,
+                 "Coded targets of `bayon targets`, appended as keypoints "
+                 "that match pairs by name");
   app.add_option(
       "--num_threads", options.num_threads, "Images in parallel (-1 = all)");
   app.add_option("--log_path",
@@ -78,7 +82,9 @@ int RunFeatures(int argc, char** argv) {
                                   : 0,
                               " per image, ",
                               summary.num_sift,
-                              " SIFT), ",
+                              " SIFT, ",
+                              summary.num_targets,
+                              " targets), ",
                               summary.num_skipped,
                               " skipped, ",
                               summary.num_pairs_invalidated,

@@ -4,7 +4,10 @@
 #include "ext/colmap/table_matches.h"
 #include "ext/core/errors.h"
 
+#include <glog/logging.h>
+
 #include <cstring>
+#include <sstream>
 
 namespace bayon {
 
@@ -74,6 +77,78 @@ void DeleteKeypointInterest(Database* database, image_t image_id) {
   SqliteStatement statement(
       database->connection(),
       "DELETE FROM bayon_keypoint_interest WHERE image_id = ?");
+  statement.Bind(1, static_cast<int64_t>(image_id));
+  statement.Execute();
+}
+
+const BayonTable kKeypointTargetsTable = {
+    "bayon_keypoint_targets",
+    "CREATE TABLE IF NOT EXISTS bayon_keypoint_targets ("
+    "image_id INTEGER PRIMARY KEY NOT NULL, "
+    "num_keypoints INTEGER NOT NULL, targets TEXT NOT NULL, "
+    "FOREIGN KEY(image_id) REFERENCES images(image_id) ON DELETE CASCADE)"};
+
+// One line per target: POINT2D_IDX NAME SIGMA_PX.
+void WriteKeypointTargets(Database* database,
+                          image_t image_id,
+                          int num_keypoints,
+                          const std::vector<KeypointTarget>& targets) {
+  EnsureBayonTable(database, kKeypointTargetsTable);
+  std::ostringstream text;
+  text.precision(9);
+  for (const KeypointTarget& target : targets) {
+    CHECK_LT(target.point2D_idx, static_cast<uint32_t>(num_keypoints));
+    text << target.point2D_idx << " " << target.name << " " << target.sigma_px
+         << "\n";
+  }
+  SqliteStatement statement(
+      database->connection(),
+      "INSERT OR REPLACE INTO bayon_keypoint_targets(image_id, "
+      "num_keypoints, targets) VALUES(?, ?, ?)");
+  statement.Bind(1, static_cast<int64_t>(image_id))
+      .Bind(2, static_cast<int64_t>(num_keypoints))
+      .Bind(3, text.str());
+  statement.Execute();
+}
+
+std::vector<KeypointTarget> ReadKeypointTargets(Database* database,
+                                                image_t image_id,
+                                                int num_keypoints) {
+  if (!BayonTableExists(database, kKeypointTargetsTable.name)) return {};
+  SqliteStatement statement(database->connection(),
+                            "SELECT num_keypoints, targets FROM "
+                            "bayon_keypoint_targets WHERE image_id = ?");
+  statement.Bind(1, static_cast<int64_t>(image_id));
+  if (!statement.Step() || statement.ColumnInt64(0) != num_keypoints) {
+    return {};
+  }
+  std::vector<KeypointTarget> targets;
+  std::istringstream lines(statement.ColumnText(1));
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::istringstream fields(line);
+    KeypointTarget target;
+    int64_t idx = -1;
+    if (!(fields >> idx >> target.name >> target.sigma_px) || idx < 0 ||
+        idx >= num_keypoints) {
+      ThrowInputError(database->path(),
+                      ": bayon_keypoint_targets row of image ",
+                      image_id,
+                      ": '",
+                      line,
+                      "' is not a keypoint row, a name and a sigma");
+    }
+    target.point2D_idx = static_cast<uint32_t>(idx);
+    targets.push_back(std::move(target));
+  }
+  return targets;
+}
+
+void DeleteKeypointTargets(Database* database, image_t image_id) {
+  if (!BayonTableExists(database, kKeypointTargetsTable.name)) return;
+  SqliteStatement statement(
+      database->connection(),
+      "DELETE FROM bayon_keypoint_targets WHERE image_id = ?");
   statement.Bind(1, static_cast<int64_t>(image_id));
   statement.Execute();
 }

@@ -32,6 +32,29 @@ std::optional<KeypointInterestRecord> ReadKeypointInterest(Database* database,
                                                            image_t image_id);
 void DeleteKeypointInterest(Database* database, image_t image_id);
 
+// bayon_keypoint_targets: which keypoints of an image are coded targets
+// (`bayon targets`, appended by `bayon features --targets_path`), by row,
+// with their names and standard deviations. `bayon match` pairs them by
+// name, not by correlation or descriptor. A record written for another
+// number of keypoints is stale (the keypoints were replaced since) and is
+// read as none.
+struct KeypointTarget {
+  uint32_t point2D_idx = 0;
+  std::string name;
+  float sigma_px = 0;
+};
+
+extern const BayonTable kKeypointTargetsTable;
+
+void WriteKeypointTargets(Database* database,
+                          image_t image_id,
+                          int num_keypoints,
+                          const std::vector<KeypointTarget>& targets);
+std::vector<KeypointTarget> ReadKeypointTargets(Database* database,
+                                                image_t image_id,
+                                                int num_keypoints);
+void DeleteKeypointTargets(Database* database, image_t image_id);
+
 }  // namespace bayon
 
 namespace bayon {

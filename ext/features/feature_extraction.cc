@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/features/feature_extraction.h"
 
+#include "ext/colmap/control_io.h"
 #include "ext/colmap/database.h"
 #include "ext/colmap/table_features.h"
 #include "ext/core/errors.h"
@@ -86,7 +87,56 @@ struct Job {
   std::string path;
   ImageFeatureResult result;
   ImageFeatures features;
+  std::vector<ImageMeasurement> targets;  // targets_path's, of this image
 };
+
+// The targets file's measurements, by image; one that names an image the
+// database does not have is refused (a file of another project).
+void AssignTargets(const std::string& targets_path,
+                   const std::string& database_path,
+                   std::vector<Job>* jobs) {
+  if (targets_path.empty()) return;
+  CheckFileExists(targets_path, "--targets_path");
+  std::map<std::string, Job*> by_name;
+  for (Job& job : *jobs) by_name[job.image.name] = &job;
+  for (const ImageMeasurement& m : ReadImageMeasurements(targets_path)) {
+    const auto job = by_name.find(m.image_name);
+    if (job == by_name.end()) {
+      ThrowInputError(targets_path,
+                      ": target ",
+                      m.point_name,
+                      " is measured in ",
+                      m.image_name,
+                      ", which is not in ",
+                      database_path);
+    }
+    job->second->targets.push_back(m);
+  }
+}
+
+// The targets as keypoints after the detector's (no interest value, zero
+// descriptors: neither correlation nor descriptors match them).
+std::vector<KeypointTarget> AppendTargets(
+    const std::vector<ImageMeasurement>& targets, ImageFeatures* features) {
+  const int first = static_cast<int>(features->keypoints.rows());
+  const int n = static_cast<int>(targets.size());
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<KeypointTarget> rows;
+  for (int i = 0; i < n; ++i) {
+    xy.push_back(targets[i].xy);
+    rows.push_back({static_cast<uint32_t>(first + i),
+                    targets[i].point_name,
+                    static_cast<float>(targets[i].sigma_px)});
+  }
+  features->keypoints.conservativeResize(first + n, 6);
+  features->keypoints.bottomRows(n) = KeypointsFromXY(xy);
+  if (features->descriptors.rows() > 0) {
+    features->descriptors.conservativeResize(first + n, 128);
+    features->descriptors.bottomRows(n).setZero();
+  }
+  features->interest.resize(first + n, std::numeric_limits<float>::quiet_NaN());
+  return rows;
+}
 
 // Every image must be on disk with the size its camera row claims, checked
 // from the file headers before any work.
@@ -137,6 +187,7 @@ FeatureExtractionSummary ExtractFeatures(
   CheckBayonSchema(&database);
   database.CheckWritable("keypoints");
   std::vector<Job> jobs = PlanJobs(&database, image_path, options);
+  AssignTargets(options.targets_path, database_path, &jobs);
 
   std::vector<int> todo;
   for (int i = 0; i < static_cast<int>(jobs.size()); ++i) {
@@ -150,7 +201,7 @@ FeatureExtractionSummary ExtractFeatures(
     Job& job = jobs[todo[k]];
     Timer image_timer;
     job.features = DetectImageFeatures(job.path, options);
-    job.result.num_features = static_cast<int>(job.features.keypoints.rows());
+    job.result.num_targets = static_cast<int>(job.targets.size());
     job.result.num_sift = job.features.num_sift;
     if (options.detector != FeatureDetector::kSift) {
       job.result.patch_size = ThinningPatchSize(
@@ -178,8 +229,16 @@ FeatureExtractionSummary ExtractFeatures(
       record.detector = FeatureDetectorName(options.detector);
       record.window_size = options.moravec.window_size;
       record.patch_size = job.result.patch_size;
+      const std::vector<KeypointTarget> targets =
+          AppendTargets(job.targets, &job.features);
+      job.result.num_features = static_cast<int>(job.features.keypoints.rows());
       record.interest = std::move(job.features.interest);
       database.WriteKeypoints(job.image.image_id, job.features.keypoints);
+      DeleteKeypointTargets(&database, job.image.image_id);
+      if (!targets.empty()) {
+        WriteKeypointTargets(
+            &database, job.image.image_id, job.result.num_features, targets);
+      }
       if (job.features.descriptors.rows() > 0) {
         database.WriteDescriptors(job.image.image_id, job.features.descriptors);
       }
@@ -192,6 +251,7 @@ FeatureExtractionSummary ExtractFeatures(
       ++summary.num_extracted;
       summary.num_features += job.result.num_features;
       summary.num_sift += job.result.num_sift;
+      summary.num_targets += job.result.num_targets;
       summary.images.push_back(job.result);
     }
     transaction.Commit();

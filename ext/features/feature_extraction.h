@@ -40,6 +40,10 @@ struct FeatureExtractionOptions {
   // the matches, two-view geometries and bayon pair rows of its pairs are
   // deleted with them. Without it such images are skipped.
   bool overwrite = false;
+  // Coded targets measured by `bayon targets` (NAME IMAGE X Y SIGMA lines):
+  // appended to each image's keypoints, where `bayon match` pairs them by
+  // name (bayon_keypoint_targets). Empty: none.
+  std::string targets_path;
   int num_threads = -1;  // images in parallel; -1 = all cores
   void Check() const;
 };
@@ -51,7 +55,8 @@ struct ImageFeatureResult {
   int height = 0;
   int patch_size = 0;  // the thinning patch side used
   int num_features = 0;
-  int num_sift = 0;  // of num_features
+  int num_sift = 0;     // of num_features
+  int num_targets = 0;  // of num_features
   double seconds = 0;
   bool skipped = false;
   std::string reason;  // why it was skipped
@@ -63,6 +68,7 @@ struct FeatureExtractionSummary {
   int num_skipped = 0;
   int64_t num_features = 0;
   int64_t num_sift = 0;           // of num_features
+  int64_t num_targets = 0;        // of num_features
   int num_pairs_invalidated = 0;  // pairs whose matches were removed
   double seconds = 0;
 };

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/features/feature_extraction.h"
 
+#include "ext/colmap/control_io.h"
 #include "ext/colmap/database.h"
 #include "ext/colmap/table_features.h"
 #include "ext/core/errors.h"
@@ -159,6 +160,67 @@ TEST(FeatureExtraction, KeepsKeypointsUnlessOverwriteThenDropsTheirMatches) {
   Database database(db, Database::Mode::kReadOnly);
   EXPECT_EQ(database.ReadKeypoints(1).rows(), 20);
   EXPECT_EQ(database.NumMatchedPairs(), 0);
+}
+
+// Coded targets join the keypoints after the detector's, with no interest
+// value and their names in bayon_keypoint_targets; a run without them
+// leaves no record behind.
+TEST(FeatureExtraction, AppendsCodedTargetsAsNamedKeypoints) {
+  const std::string dir = MakeWorkspace("features_targets");
+  const std::string db = dir + "/database.db";
+  const std::string targets = dir + "/targets.txt";
+  WriteImageMeasurements(targets,
+                         {{"CT4", "a.png", {20.25, 30.5}, 0.03},
+                          {"CT7", "a.png", {100.0, 90.75}, 0.05},
+                          {"CT4", "c.png", {21.0, 31.0}, 0.04}});
+  FeatureExtractionOptions options = SmallOptions();
+  options.targets_path = targets;
+  const FeatureExtractionSummary summary =
+      ExtractFeatures(db, dir + "/images", options);
+  EXPECT_EQ(summary.num_targets, 3);
+  {
+    Database database(db, Database::Mode::kReadOnly);
+    const FeatureKeypoints a = database.ReadKeypoints(1);
+    const int n = static_cast<int>(a.rows());
+    const std::vector<KeypointTarget> found =
+        ReadKeypointTargets(&database, 1, n);
+    ASSERT_EQ(found.size(), 2u);
+    EXPECT_EQ(found[0].name, "CT4");
+    EXPECT_EQ(found[0].point2D_idx, static_cast<uint32_t>(n - 2));
+    EXPECT_FLOAT_EQ(a(n - 2, 0), 20.25f);
+    EXPECT_FLOAT_EQ(a(n - 2, 1), 30.5f);
+    EXPECT_EQ(found[1].name, "CT7");
+    EXPECT_FLOAT_EQ(found[1].sigma_px, 0.05f);
+    const auto interest = ReadKeypointInterest(&database, 1);
+    ASSERT_TRUE(interest.has_value());
+    EXPECT_TRUE(std::isnan(interest->interest[n - 1]));
+    EXPECT_TRUE(std::isfinite(interest->interest[n - 3]));
+    EXPECT_TRUE(ReadKeypointTargets(&database, 2, 1000).empty());
+    EXPECT_EQ(ReadKeypointTargets(&database, 3, 1000).size(), 0u)
+        << "a record of another keypoint count is stale";
+  }
+  options.targets_path.clear();
+  options.overwrite = true;
+  ExtractFeatures(db, dir + "/images", options);
+  Database database(db, Database::Mode::kReadOnly);
+  EXPECT_TRUE(
+      ReadKeypointTargets(
+          &database, 1, static_cast<int>(database.ReadKeypoints(1).rows()))
+          .empty());
+
+  // A target in a photograph the database does not have: another
+  // project's file, refused before any work.
+  WriteImageMeasurements(targets, {{"CT4", "z.png", {20, 30}, 0.03}});
+  options.targets_path = targets;
+  const auto before = testing::HashTree(db);
+  try {
+    ExtractFeatures(db, dir + "/images", options);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("z.png"), std::string::npos);
+    EXPECT_NE(std::string(error.what()).find("targets.txt"), std::string::npos);
+  }
+  EXPECT_EQ(testing::HashTree(db), before);
 }
 
 TEST(FeatureExtraction, RefusesBadInputBeforeWriting) {

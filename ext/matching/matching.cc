@@ -55,6 +55,7 @@ struct ImageData {
   std::vector<uint8_t> by_correlation;
   FeatureDescriptors descriptors;  // empty, or a row per keypoint
   std::vector<int> descriptor_rows;
+  std::vector<KeypointTarget> targets;  // matched by name
   std::unique_ptr<ImagePatches> patches;
   cv::Mat gray;  // for the least-squares refinement
 };
@@ -78,8 +79,14 @@ void ClassifyKeypoints(Database* database, ImageData* entry) {
       ReadKeypointInterest(database, image_id);
   const bool has_interest =
       record && record->interest.size() == static_cast<size_t>(n);
+  entry->targets = ReadKeypointTargets(database, image_id, n);
+  std::vector<uint8_t> is_target(n, 0);
+  for (const KeypointTarget& target : entry->targets) {
+    is_target[target.point2D_idx] = 1;
+  }
   entry->by_correlation.assign(n, 0);
   for (int i = 0; i < n; ++i) {
+    if (is_target[i]) continue;
     const bool correlate =
         has_interest ? std::isfinite(record->interest[i]) : !has_descriptors;
     if (correlate) {
@@ -177,6 +184,32 @@ void AddDescriptorMatches(const ImageData& image1,
   }
 }
 
+// The coded targets both images show, matched by name: their decoding is
+// their identification. Their sigma is the less precise measurement's.
+void AddTargetMatches(const ImageData& image1,
+                      const ImageData& image2,
+                      PairMatches* matches) {
+  std::map<std::string, const KeypointTarget*> in_image2;
+  for (const KeypointTarget& target : image2.targets) {
+    in_image2[target.name] = &target;
+  }
+  for (const KeypointTarget& target1 : image1.targets) {
+    const auto found = in_image2.find(target1.name);
+    if (found == in_image2.end()) continue;
+    const KeypointTarget& target2 = *found->second;
+    const int row = static_cast<int>(matches->matches.rows());
+    matches->matches.conservativeResize(row + 1, 2);
+    matches->matches(row, 0) = target1.point2D_idx;
+    matches->matches(row, 1) = target2.point2D_idx;
+    matches->reference_xy1.push_back(
+        KeypointXY(image1.keypoints, target1.point2D_idx));
+    matches->refined_xy2.push_back(
+        KeypointXY(image2.keypoints, target2.point2D_idx));
+    matches->ncc.push_back(1);
+    matches->sigma_px.push_back(std::max(target1.sigma_px, target2.sigma_px));
+  }
+}
+
 void MatchPair(const std::map<image_t, ImageData>& data,
                const MatchingOptions& options,
                PairJob* job) {
@@ -192,7 +225,7 @@ void MatchPair(const std::map<image_t, ImageData>& data,
   const bool correlate = std::min(valid1, valid2) >= options.min_num_matches;
   const bool describe =
       std::min(described1, described2) >= options.min_num_matches;
-  if (!correlate && !describe) {
+  if (!correlate && !describe && data1.targets.empty()) {
     report.reason =
         StrCat("too few points to match (",
                valid1,
@@ -228,6 +261,10 @@ void MatchPair(const std::map<image_t, ImageData>& data,
     report.num_descriptor_matches =
         static_cast<int>(job->matches.matches.rows()) - before;
   }
+  const int before_targets = static_cast<int>(job->matches.matches.rows());
+  AddTargetMatches(data1, data2, &job->matches);
+  report.num_target_matches =
+      static_cast<int>(job->matches.matches.rows()) - before_targets;
   const PairMatches& matches = job->matches;
   report.rotation_deg = matches.mapping.RotationDeg();
   report.mapping_found = matches.mapping.found;
@@ -296,6 +333,9 @@ void LogPair(const MatchingOptions& options, const PairMatchReport& report) {
     }
     if (report.num_descriptor_matches > 0) {
       line << report.num_descriptor_matches << " by descriptor, ";
+    }
+    if (report.num_target_matches > 0) {
+      line << report.num_target_matches << " coded targets, ";
     }
     line << report.num_matches << " matches, " << report.seconds << " s";
     if (!report.written) line << " -- not written: " << report.reason;

@@ -65,6 +65,7 @@ struct PairMatchReport {
   int num_candidates = 0;
   int num_relaxed = 0;
   int num_descriptor_matches = 0;  // of num_matches
+  int num_target_matches = 0;      // of num_matches: coded targets, by name
   int num_matches = 0;
   // Least-squares refinement: matches it rejected (kept at their
   // correlation peaks, or dropped) by reason, the median move from the
