@@ -68,6 +68,10 @@ struct PairOrientationReport {
   int num_matches = 0;
   int num_inliers = 0;
   int num_blunders = 0;
+  // Matches of two coded targets; anchored: they oriented the pair first
+  // and the other matches joined where they agreed.
+  int num_target_points = 0;
+  bool anchored_by_targets = false;
   double sigma0_px = 0;
   double convergence_angle_deg = 0;
   double median_intersection_angle_deg = 0;
