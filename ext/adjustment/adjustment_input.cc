@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 namespace bayon {
 namespace {
@@ -124,6 +125,7 @@ using ObservationKey = std::pair<image_t, point2D_t>;
 std::map<ObservationKey, Eigen::Matrix2d> TakeTiePointsFromDatabase(
     const std::string& input_path,
     const std::vector<TiePointRecord>& tie_points,
+    const std::set<size_t>& control_points,
     bool replace,
     Database* database,
     double min_sigma_px,
@@ -143,7 +145,8 @@ std::map<ObservationKey, Eigen::Matrix2d> TakeTiePointsFromDatabase(
     }
   }
   std::map<ObservationKey, Eigen::Matrix2d> covariances;
-  for (const TiePointRecord& tie : tie_points) {
+  for (size_t t = 0; t < tie_points.size(); ++t) {
+    const TiePointRecord& tie = tie_points[t];
     Point3D point;
     std::vector<Ray> rays;
     for (const TieObservation& observation : tie.observations) {
@@ -163,7 +166,9 @@ std::map<ObservationKey, Eigen::Matrix2d> TakeTiePointsFromDatabase(
                           observation.xy);
       if (ray) rays.push_back(*ray);
     }
-    if (point.track.size() < 2) continue;
+    // A control point's observations keep their 2D points (the keypoints'
+    // order) but make no tie point: the datum adds the point.
+    if (point.track.size() < 2 || control_points.count(t)) continue;
     const std::optional<Eigen::Vector3d> xyz = IntersectRays(rays);
     if (!xyz) continue;
     point.xyz = *xyz;
@@ -275,11 +280,22 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
     CheckCameraCalibration(camera, input_path);
   }
   // Read everything needed first; the control is read before any work.
-  const ControlData control = ReadControlFolder(control_path);
+  ControlData control = ReadControlFolder(control_path);
 
   Database database(database_path, Database::Mode::kReadOnly);
   const std::vector<TiePointRecord> tie_points =
       ReadTiePointsFor(&database, options.tie_points);
+  std::map<image_t, std::string> image_names;
+  for (const DatabaseImage& image : database.ReadAllImages()) {
+    image_names[image.image_id] = image.name;
+  }
+  const std::set<size_t> control_points =
+      TakeControlFromNamedTiePoints(tie_points, image_names, &control);
+  if (!control_points.empty()) {
+    input.notes.push_back(StrCat(control_points.size(),
+                                 " control or check points measured as named "
+                                 "tie points (coded targets)"));
+  }
   const bool use_tie_points = !tie_points.empty();
   const bool replace = options.tie_points == TiePointSource::kAlsm;
   if (!replace) {
@@ -295,6 +311,7 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
   if (use_tie_points) {
     covariances = TakeTiePointsFromDatabase(input_path,
                                             tie_points,
+                                            control_points,
                                             replace,
                                             &database,
                                             options.min_tie_sigma_px,

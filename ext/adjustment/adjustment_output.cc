@@ -432,21 +432,35 @@ class ReportBuilder {
     Json points = Json::array();
     Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
     int count = 0;
+    double max_normalized = 0;
     for (size_t i = 0; i < block_.points.size(); ++i) {
       const BlockPoint& point = block_.points[i];
       if (point.kind != PointKind::kCheck || !point.active) continue;
       const Eigen::Vector3d difference = point.xyz - point.given_xyz;
       sum_sq += difference.cwiseAbs2();
       ++count;
-      points.push_back(
-          {{"name", point.name},
-           {"given", Vec(point.given_xyz)},
-           {"adjusted", Vec(point.xyz)},
-           {"difference_mm", Vec(kMm * difference)},
-           {"std_dev_mm", Vec(kMm * StdDevs(precision_.point_covariance[i]))},
-           {"rays", counts_.rays[i]}});
+      // The difference's standard deviation: the adjusted point's and the
+      // given coordinates' (the survey's), independent of each other.
+      const Eigen::Vector3d std_dev = StdDevs(precision_.point_covariance[i]);
+      const Eigen::Vector3d difference_std_dev =
+          (std_dev.cwiseAbs2() + point.given_sigma.cwiseAbs2()).cwiseSqrt();
+      const double normalized =
+          difference.cwiseQuotient(difference_std_dev).cwiseAbs().maxCoeff();
+      max_normalized = std::max(max_normalized, normalized);
+      points.push_back({{"name", point.name},
+                        {"given", Vec(point.given_xyz)},
+                        {"adjusted", Vec(point.xyz)},
+                        {"difference_mm", Vec(kMm * difference)},
+                        {"std_dev_mm", Vec(kMm * std_dev)},
+                        {"given_std_dev_mm", Vec(kMm * point.given_sigma)},
+                        {"max_normalized_difference", normalized},
+                        {"rays", counts_.rays[i]}});
     }
     json["num"] = count;
+    // The largest |difference| over its standard deviation (adjusted and
+    // given together), over the axes and points: within 3 where the stated
+    // precisions hold.
+    json["max_normalized_difference"] = max_normalized;
     if (count > 0) {
       const Eigen::Vector3d rms = (sum_sq / count).cwiseSqrt();
       json["rms_mm"] = Vec(kMm * rms);
@@ -796,14 +810,18 @@ std::string Printout(const Json& r) {
     out += " CHECK POINTS (adjusted - given)\n" + Rule();
     out +=
         "   name          dX [mm]   dY [mm]   dZ [mm]    sX [mm]   sY "
-        "[mm]   sZ [mm]  rays\n";
+        "[mm]   sZ [mm]  rays  |d|/s\n";
     for (const Json& p : checks["points"]) {
-      out += Printf("   %-10s %s  %s %5d\n",
+      out += Printf("   %-10s %s  %s %5d %6.2f\n",
                     p["name"].get<std::string>().c_str(),
                     Triple(p["difference_mm"], "%9.2f %9.2f %9.2f").c_str(),
                     Triple(p["std_dev_mm"], "%9.2f %9.2f %9.2f").c_str(),
-                    p["rays"].get<int>());
+                    p["rays"].get<int>(),
+                    p["max_normalized_difference"].get<double>());
     }
+    out +=
+        "   (s: the adjusted point's; |d|/s: the largest difference over "
+        "its standard deviation, the given coordinates' included)\n";
     out += "   RMS        " + Triple(checks["rms_mm"], "%9.2f %9.2f %9.2f") +
            Printf("    3D: %.2f mm\n", checks["rms_3d_mm"].get<double>());
   }

@@ -136,7 +136,7 @@ class DatumBuilder {
             point.name,
             "' is measured in no image of the model (",
             control_.folder,
-            "/observations.txt)");
+            "/observations.txt, nor found by bayon targets)");
       }
     }
   }
@@ -580,13 +580,46 @@ ControlData ReadControlFolder(const std::string& folder) {
     control.measurements = ReadImageMeasurements(measurements);
   }
   if (fs::exists(distances)) control.distances = ReadDistances(distances);
-  if (!control.points.empty() && control.measurements.empty()) {
-    ThrowInputError(measurements,
-                    ": missing or empty, but ",
-                    points,
-                    " lists points: they must be measured in the images");
-  }
+  // Points without measurements here may be coded targets, measured
+  // automatically (TakeControlFromNamedTiePoints); every point's
+  // measurements are checked when the datum is set up.
   return control;
+}
+
+std::set<size_t> TakeControlFromNamedTiePoints(
+    const std::vector<TiePointRecord>& tie_points,
+    const std::map<image_t, std::string>& image_names,
+    ControlData* control) {
+  std::set<std::string> control_names;
+  for (const ControlPoint& point : control->points) {
+    control_names.insert(point.name);
+  }
+  std::set<std::pair<std::string, std::string>> measured;  // name, image
+  for (const ImageMeasurement& m : control->measurements) {
+    measured.insert({m.point_name, m.image_name});
+  }
+  std::set<size_t> taken;
+  for (size_t i = 0; i < tie_points.size(); ++i) {
+    const TiePointRecord& tie = tie_points[i];
+    if (tie.name.empty() || control_names.count(tie.name) == 0) continue;
+    taken.insert(i);
+    for (const TieObservation& observation : tie.observations) {
+      const auto image = image_names.find(observation.image_id);
+      if (image == image_names.end()) continue;
+      if (measured.count({tie.name, image->second})) continue;
+      ImageMeasurement m;
+      m.point_name = tie.name;
+      m.image_name = image->second;
+      m.xy = observation.xy;
+      m.sigma_px = std::sqrt(std::max(
+          0.0,
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(observation.covariance)
+              .eigenvalues()
+              .maxCoeff()));
+      control->measurements.push_back(m);
+    }
+  }
+  return taken;
 }
 
 void DatumOptions::Check() const {

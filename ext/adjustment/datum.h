@@ -42,9 +42,12 @@
 
 #include "ext/adjustment/adjustment_block.h"
 #include "ext/colmap/control_io.h"
+#include "ext/colmap/table_tie_points.h"
 #include "ext/core/sim3.h"
 
+#include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -65,6 +68,18 @@ struct ControlData {
 };
 // Throws InputError when the folder does not exist or a file is malformed.
 ControlData ReadControlFolder(const std::string& folder);
+
+// A named tie point of `bayon tiepoints` (a coded target of `bayon
+// targets`, a manual point) whose name has coordinates in the control is
+// that control or check point: its observations join the control's
+// measurements (SIGMA the covariance's larger axis), in the images where
+// observations.txt has none of it. Returns which tie points (indices) they
+// were: the caller keeps them out of the tie points, so that no point
+// enters the block twice.
+std::set<size_t> TakeControlFromNamedTiePoints(
+    const std::vector<TiePointRecord>& tie_points,
+    const std::map<image_t, std::string>& image_names,
+    ControlData* control);
 
 struct DatumOptions {
   DatumType datum = DatumType::kAuto;

@@ -26,6 +26,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <set>
 #include <unordered_map>
 
 namespace bayon {
@@ -70,8 +71,8 @@ class StripBuilder {
 
   StripResult Build() {
     Timer timer;
-    const ControlData control = ReadControlFolder(control_path_);
-    LoadImagesAndCameras();
+    ControlData control = ReadControlFolder(control_path_);
+    LoadImagesAndCameras(&control);
     DropInconsistentPairs();
     BuildTracks();
     ChainModels();
@@ -89,7 +90,7 @@ class StripBuilder {
 
  private:
   // ---------------------------------------------------------------- input
-  void LoadImagesAndCameras() {
+  void LoadImagesAndCameras(ControlData* control) {
     CheckFileExists(database_path_, "--database_path");
     Database database(database_path_, Database::Mode::kReadOnly);
     std::vector<DatabaseImage> rows = database.ReadAllImages();
@@ -177,8 +178,12 @@ class StripBuilder {
     }
     const std::vector<TiePointRecord> tie_points =
         ReadTiePointsFor(&database, options_.tie_points);
+    std::map<image_t, std::string> image_names;
+    for (const DatabaseImage& row : rows) image_names[row.image_id] = row.name;
     use_matches_ = options_.tie_points != TiePointSource::kAlsm;
-    AppendTieObservations(tie_points);
+    AppendTieObservations(
+        tie_points,
+        TakeControlFromNamedTiePoints(tie_points, image_names, control));
   }
 
   // ----------------------------------------------------------- view graph
@@ -226,10 +231,14 @@ class StripBuilder {
     }
   }
 
-  // The tie observations after each image's keypoints, and their tracks.
-  void AppendTieObservations(const std::vector<TiePointRecord>& tie_points) {
+  // The tie observations after each image's keypoints, and their tracks;
+  // control points' observations keep their place among the keypoints but
+  // make no track (the control adds those points).
+  void AppendTieObservations(const std::vector<TiePointRecord>& tie_points,
+                             const std::set<size_t>& control_points) {
     std::vector<std::vector<Eigen::Vector2d>> xy(images_.size());
-    for (const TiePointRecord& point : tie_points) {
+    for (size_t t = 0; t < tie_points.size(); ++t) {
+      const TiePointRecord& point = tie_points[t];
       std::vector<std::pair<int, int>> track;
       for (const TieObservation& observation : point.observations) {
         auto it = image_idxs_.find(observation.image_id);
@@ -242,7 +251,9 @@ class StripBuilder {
         image.tie_covariances.push_back(FlooredCovariance(
             observation.covariance, options_.min_tie_sigma_px));
       }
-      if (track.size() >= 2) tie_tracks_.push_back(std::move(track));
+      if (track.size() >= 2 && !control_points.count(t)) {
+        tie_tracks_.push_back(std::move(track));
+      }
     }
     result_.num_alsm_tie_points = static_cast<int>(tie_tracks_.size());
     for (size_t i = 0; i < images_.size(); ++i) {
