@@ -210,17 +210,24 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
   std::normal_distribution<double> gauss(0, 1);
   int number = 0;
   std::set<std::string> coded;
+  std::map<std::string, int> num_seen;
+  for (const ImageMeasurement& truth : observations) {
+    ++num_seen[truth.point_name];
+  }
   for (const ControlTarget& target : scene.model.targets) {
     ControlPoint point;
     point.name = target.name;
     point.xyz = target.center;
     points.push_back(point);
     if (target.on_bar) continue;  // the bar gives scale and vertical only
-    // Coded targets are found by `bayon targets`, not given: their truth
-    // stays in gt/control.
+    // Coded targets are found by `bayon targets`, not measured by hand:
+    // their image measurements stay in gt/control. A third of them (codes
+    // divisible by 3) seen in three photographs or more were surveyed:
+    // their coordinates are in control/, so they are control or check
+    // points; the others are tie points.
     if (target.code >= 0) {
       coded.insert(target.name);
-      continue;
+      if (target.code % 3 != 0 || num_seen[target.name] < 3) continue;
     }
     ControlPoint user = point;
     user.sigma.setConstant(options.control_sigma_m);
