@@ -77,7 +77,7 @@ TEST(Pipeline, TempleEndToEndThenUpToDateThenResumesAfterKill) {
   EXPECT_FALSE(fs::is_empty(ws + "/renders"));
   EXPECT_EQ(testing::HashTree(temple.images), images_before);
   const nlohmann::json json = ReadJson(ws + "/pipeline.json");
-  EXPECT_EQ(json["stages"].size(), 15u) << json.dump(1);
+  EXPECT_EQ(json["stages"].size(), 16u) << json.dump(1);
   EXPECT_GT(json["total_seconds"].get<double>(), 0);
 
   // Every photograph oriented, as bayon's chain does stage by stage
@@ -129,6 +129,7 @@ TEST(Pipeline, TempleEndToEndThenUpToDateThenResumesAfterKill) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto statuses = Statuses(ws);
   for (const char* stage : {"import",
+                            "targets",
                             "features",
                             "match",
                             "relative",

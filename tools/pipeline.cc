@@ -16,6 +16,7 @@
 // The stages run in this process (kill -9 of the pipeline stops the stage
 // with it); stock COLMAP stages, swapped in by the config, run as a child.
 #include "ext/colmap/colmap_cli.h"
+#include "ext/colmap/model_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/image/image_io.h"
@@ -47,6 +48,7 @@ using Options = std::vector<std::pair<std::string, std::string>>;
 // close the run.
 constexpr const char* kStageNames[] = {"import",
                                        "interior",
+                                       "targets",
                                        "features",
                                        "match",
                                        "relative",
@@ -236,6 +238,7 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
     return base;
   };
   const Options threads_option = {{"num_threads", threads}};
+  const std::string targets = In(w, "targets/targets.txt");
 
   add({"import",
        "bayon",
@@ -272,10 +275,22 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
          {c.database},
          {}});
   } else {
+    // Coded targets, wherever any are found: keypoints that match by name
+    // (they close a ring where texture fails), then named tie points.
+    add({"targets",
+         "bayon",
+         "targets",
+         with(db_images,
+              {{"output_path", targets},
+               {"report_path", In(w, "targets/targets.json")},
+               {"num_threads", threads}}),
+         true,
+         {targets},
+         {}});
     add({"features",
          "bayon",
          "features",
-         with(db_images, threads_option),
+         with(db_images, {{"targets_path", targets}, {"num_threads", threads}}),
          true,
          {c.database},
          {}});
@@ -311,7 +326,9 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
          "bayon",
          "tiepoints",
          with(db_images,
-              {{"num_threads", threads}, {"report_path", tie_report}}),
+              {{"num_threads", threads},
+               {"report_path", tie_report},
+               {"targets_path", targets}}),
          true,
          {c.database, tie_report},
          {}});
@@ -455,7 +472,10 @@ std::vector<Stage> MakeStages(const Context& c, const Config& config) {
       SetOption(&evaluate, "cloud_path", points);
       SetOption(&evaluate, "mesh_path", mesh);
     }
-    if (fs::is_directory(In(w, "gt/heldout"))) {
+    // A truth rendered with no held-out views (synth --num_heldout_views
+    // 0) has an empty gt/heldout: nothing to compare renders with.
+    if (fs::is_directory(In(w, "gt/heldout")) &&
+        ReadModel(In(w, "gt/heldout")).images.size() > 0) {
       // evaluate reads the textured model as PLY (its TextureFile comment
       // names the atlas).
       SetOption(&evaluate, "textured_mesh_path", In(w, "model/model.ply"));
@@ -513,6 +533,7 @@ int RunBayonCommand(const std::string& command,
   static const std::map<std::string, int (*)(int, char**)> kRun = {
       {"import", RunImport},
       {"interior", RunInterior},
+      {"targets", RunTargets},
       {"features", RunFeatures},
       {"match", RunMatch},
       {"relative", RunRelative},

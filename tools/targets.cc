@@ -6,7 +6,11 @@
 #include "tools/command.h"
 #include "tools/commands.h"
 
+#include <filesystem>
+
 namespace bayon {
+
+namespace fs = std::filesystem;
 
 int RunTargets(int argc, char** argv) {
   std::string database_path, image_path, output_path, report_path, log_path;
@@ -94,6 +98,9 @@ int RunTargets(int argc, char** argv) {
 
   const CodedTargetSummary summary =
       FindCodedTargets(database_path, image_path, options, num_threads);
+  for (const std::string& path : {output_path, report_path}) {
+    if (!path.empty()) fs::create_directories(fs::absolute(path).parent_path());
+  }
   WriteImageMeasurements(output_path, summary.measurements);
   if (!report_path.empty()) {
     WriteFileAtomically(report_path,
