@@ -44,6 +44,7 @@ packages=(
   libpcl-dev libcgal-dev libopenmesh-dev libtbb-dev
   libboost-graph-dev  # mesh's delaunay_graph_cut: Boykov-Kolmogorov max flow
   libcli11-dev nlohmann-json3-dev libexiv2-dev libtinygltf-dev libstb-dev
+  libproj-dev  # import_control: survey CRSs into a local projected frame
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium  # viewer_test opens the page of bayon viewer in it
   assimp-utils  # texture_test opens the exported models with Assimp

@@ -25,6 +25,7 @@ int RunRelative(int argc, char** argv);
 int RunDisparity(int argc, char** argv);
 int RunTiePoints(int argc, char** argv);
 int RunTargets(int argc, char** argv);
+int RunImportControl(int argc, char** argv);
 int RunRefineKeypoints(int argc, char** argv);
 int RunRender(int argc, char** argv);
 int RunTexture(int argc, char** argv);

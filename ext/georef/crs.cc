@@ -1,0 +1,164 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "ext/georef/crs.h"
+
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <proj.h>
+#include <regex>
+
+namespace bayon {
+namespace {
+
+// A CRS object for a question about it; nullptr where PROJ does not know
+// the text.
+PJ* CreateCrs(PJ_CONTEXT* context, const std::string& crs) {
+  PJ* object = proj_create(context, crs.c_str());
+  if (object != nullptr && !proj_is_crs(object)) {
+    proj_destroy(object);
+    return nullptr;
+  }
+  return object;
+}
+
+std::string ProjError(PJ_CONTEXT* context) {
+  const int error = proj_context_errno(context);
+  return error == 0 ? "not a coordinate reference system"
+                    : proj_context_errno_string(context, error);
+}
+
+}  // namespace
+
+std::string NormalizeCrs(const std::string& text) {
+  static const std::regex kOdmUtm(
+      R"(\s*WGS84\s+UTM\s+(\d{1,2})\s*([NnSs])\s*)");
+  std::smatch match;
+  if (std::regex_match(text, match, kOdmUtm)) {
+    const int zone = std::stoi(match[1]);
+    if (zone < 1 || zone > 60) {
+      ThrowInputError("CRS '", text, "': UTM zones are 1 to 60");
+    }
+    const bool north = match[2] == "N" || match[2] == "n";
+    return StrCat("EPSG:", (north ? 32600 : 32700) + zone);
+  }
+  if (!text.empty() && text[0] == '+' &&
+      text.find("+type=crs") == std::string::npos) {
+    return text + " +type=crs";
+  }
+  return text;
+}
+
+bool IsGeographicCrs(const std::string& crs) {
+  PJ_CONTEXT* context = proj_context_create();
+  PJ* object = CreateCrs(context, crs);
+  if (object == nullptr) {
+    const std::string why = ProjError(context);
+    proj_context_destroy(context);
+    ThrowInputError("unknown CRS '", crs, "' (PROJ: ", why, ")");
+  }
+  const PJ_TYPE type = proj_get_type(object);
+  proj_destroy(object);
+  proj_context_destroy(context);
+  return type == PJ_TYPE_GEOGRAPHIC_2D_CRS || type == PJ_TYPE_GEOGRAPHIC_3D_CRS;
+}
+
+std::string UtmCrsFor(double longitude_deg, double latitude_deg) {
+  const int zone = std::clamp(
+      static_cast<int>(std::floor((longitude_deg + 180) / 6)) + 1, 1, 60);
+  return StrCat("EPSG:", (latitude_deg >= 0 ? 32600 : 32700) + zone);
+}
+
+CrsTransform::CrsTransform(const std::string& from, const std::string& to)
+    : context_(proj_context_create()),
+      what_(StrCat("from ", from, " to ", to)) {
+  for (const std::string* crs : {&from, &to}) {
+    PJ* object = CreateCrs(context_, *crs);
+    if (object == nullptr) {
+      const std::string why = ProjError(context_);
+      proj_context_destroy(context_);
+      ThrowInputError("unknown CRS '", *crs, "' (PROJ: ", why, ")");
+    }
+    proj_destroy(object);
+  }
+  PJ* transform =
+      proj_create_crs_to_crs(context_, from.c_str(), to.c_str(), nullptr);
+  if (transform == nullptr) {
+    const std::string why = ProjError(context_);
+    proj_context_destroy(context_);
+    ThrowInputError("no transformation ", what_, " (PROJ: ", why, ")");
+  }
+  // East / north and longitude / latitude, whatever the CRSs' axis order
+  // (EPSG:4326 is latitude first).
+  transform_ = proj_normalize_for_visualization(context_, transform);
+  proj_destroy(transform);
+  if (transform_ == nullptr) {
+    proj_context_destroy(context_);
+    ThrowInputError("no transformation ", what_);
+  }
+}
+
+CrsTransform::~CrsTransform() {
+  proj_destroy(transform_);
+  proj_context_destroy(context_);
+}
+
+Eigen::Vector3d CrsTransform::Forward(const Eigen::Vector3d& point) const {
+  return Transform(point, true);
+}
+
+Eigen::Vector3d CrsTransform::Inverse(const Eigen::Vector3d& point) const {
+  return Transform(point, false);
+}
+
+Eigen::Vector3d CrsTransform::Transform(const Eigen::Vector3d& point,
+                                        bool forward) const {
+  const PJ_COORD in = proj_coord(point.x(), point.y(), point.z(), 0);
+  const PJ_COORD out = proj_trans(transform_, forward ? PJ_FWD : PJ_INV, in);
+  const Eigen::Vector3d result(out.xyz.x, out.xyz.y, out.xyz.z);
+  if (!result.allFinite() || std::abs(result.x()) == HUGE_VAL) {
+    ThrowInputError("(",
+                    point.x(),
+                    ", ",
+                    point.y(),
+                    ", ",
+                    point.z(),
+                    ") cannot be transformed ",
+                    what_,
+                    forward ? "" : " (inverse)");
+  }
+  return result;
+}
+
+void WriteGeoFrame(const std::string& path, const GeoFrame& frame) {
+  nlohmann::ordered_json json;
+  json["source_crs"] = frame.source_crs;
+  json["crs"] = frame.crs;
+  json["origin"] = {frame.origin.x(), frame.origin.y(), frame.origin.z()};
+  json["note"] =
+      "model coordinates = crs coordinates - origin (metres); heights as the "
+      "survey gave them";
+  WriteFileAtomically(path, json.dump(2) + "\n");
+}
+
+GeoFrame ReadGeoFrame(const std::string& path) {
+  CheckFileExists(path, "crs.json");
+  GeoFrame frame;
+  try {
+    const nlohmann::json json = nlohmann::json::parse(ReadFileToString(path));
+    frame.source_crs = json.at("source_crs").get<std::string>();
+    frame.crs = json.at("crs").get<std::string>();
+    const auto& origin = json.at("origin");
+    frame.origin = Eigen::Vector3d(origin.at(0).get<double>(),
+                                   origin.at(1).get<double>(),
+                                   origin.at(2).get<double>());
+  } catch (const nlohmann::json::exception& error) {
+    ThrowInputError(path, ": not a bayon crs.json (", error.what(), ")");
+  }
+  return frame;
+}
+
+}  // namespace bayon
