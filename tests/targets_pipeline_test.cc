@@ -7,7 +7,8 @@
 // ones are control and check points of the bundle. Judged against the
 // truth: every image oriented, the check points within three standard
 // deviations, sigma0 as the weights state, the calibration within 2.5
-// standard deviations of the truth.
+// standard deviations of the truth. Then the survey as a gcp_list.txt in
+// UTM, through import_control.
 #include "ext/colmap/control_io.h"
 #include "ext/core/file_util.h"
 
@@ -15,7 +16,10 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <map>
 #include <set>
+#include <sstream>
 
 #include "tests/testing.h"
 
@@ -24,6 +28,11 @@ namespace {
 
 nlohmann::json ReadJson(const std::string& path) {
   return nlohmann::json::parse(ReadFileToString(path));
+}
+
+Eigen::Vector3d ReadGeoFrameOrigin(const std::string& path) {
+  const nlohmann::json origin = ReadJson(path)["origin"];
+  return Eigen::Vector3d(origin[0], origin[1], origin[2]);
 }
 
 TEST(TargetsPipeline, CodedTargetsOrientAndControlTheTowerRing) {
@@ -96,6 +105,86 @@ TEST(TargetsPipeline, CodedTargetsOrientAndControlTheTowerRing) {
   EXPECT_LT(
       evaluation["calibration"][0]["max_abs_error_over_sigma"].get<double>(),
       2.5);
+
+  // The same survey as OpenDroneMap's gcp_list.txt in UTM zone 48 N (the
+  // tower's frame shifted to near the Bayon's grid coordinates), through
+  // import_control and adjust: the check points as before, the model's
+  // frame stated beside it.
+  const Eigen::Vector3d utm_offset(372000, 1486000, 20);
+  std::map<std::string, ControlPoint> given;
+  std::string check_names;
+  for (const ControlPoint& point :
+       ReadControlPoints(ws + "/control/points.txt")) {
+    given[point.name] = point;
+    if (point.type == ControlPointType::kCheck && !surveyed.count(point.name)) {
+      check_names += (check_names.empty() ? "" : ",") + point.name;
+    }
+  }
+  std::ostringstream gcp_list;
+  gcp_list.precision(12);
+  gcp_list << "WGS84 UTM 48N\n";
+  for (const ImageMeasurement& m :
+       ReadImageMeasurements(ws + "/control/observations.txt")) {
+    if (!given.count(m.point_name)) continue;  // the levelling bar's
+    const Eigen::Vector3d xyz = given[m.point_name].xyz + utm_offset;
+    gcp_list << xyz.x() << " " << xyz.y() << " " << xyz.z() << " " << m.xy.x()
+             << " " << m.xy.y() << " " << m.image_name << " " << m.point_name
+             << "\n";
+  }
+  WriteFileAtomically(dir + "/gcp_list.txt", gcp_list.str());
+  result = testing::RunBayon({"import_control",
+                              "--format",
+                              "odm",
+                              "--input_path",
+                              dir + "/gcp_list.txt",
+                              "--output_path",
+                              dir + "/control_utm",
+                              "--image_path",
+                              ws + "/images",
+                              "--check_names",
+                              check_names,
+                              "--sigma_m",
+                              "0.002"});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  result = testing::RunBayon({"adjust",
+                              "--database_path",
+                              ws + "/database.db",
+                              "--input_path",
+                              ws + "/sparse/initial",
+                              "--output_path",
+                              dir + "/adjusted_utm",
+                              "--control_path",
+                              dir + "/control_utm"});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json utm = ReadJson(dir + "/adjusted_utm/adjustment.json");
+  const nlohmann::json& utm_checks = utm["check_points"];
+  std::cout << "in UTM: " << utm_checks["num"] << " check points, RMS "
+            << utm_checks["rms_mm"] << " mm per axis, largest |d|/s "
+            << utm_checks["max_normalized_difference"] << "\n";
+  // Measured: 3 check points, 1.5 / 1.6 / 1.9 mm, 1.0.
+  EXPECT_EQ(utm_checks["num"].get<int>(), 3);
+  for (int k = 0; k < 3; ++k) EXPECT_LT(utm_checks["rms_mm"][k], 5.0);
+  EXPECT_LT(utm_checks["max_normalized_difference"].get<double>(), 3.0);
+  EXPECT_EQ(utm["georeference"]["crs"], "EPSG:32648");
+  EXPECT_EQ(ReadGeoFrameOrigin(dir + "/adjusted_utm/crs.json"),
+            Eigen::Vector3d(372000, 1486000, 22));
+
+  // A GCP in a photograph that is not the project's: one line naming the
+  // file, nothing written.
+  WriteFileAtomically(dir + "/gcp_bad.txt",
+                      "EPSG:32648\n372001 1486002 21 10 20 missing.png G1\n");
+  result = testing::RunBayon({"import_control",
+                              "--input_path",
+                              dir + "/gcp_bad.txt",
+                              "--output_path",
+                              dir + "/control_bad",
+                              "--image_path",
+                              ws + "/images"});
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  EXPECT_NE(result.LastLine().find("missing.png"), std::string::npos)
+      << result.LastLine();
+  EXPECT_NE(result.LastLine().find("gcp_bad.txt"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/control_bad/points.txt"));
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 
 namespace bayon {
@@ -113,6 +114,13 @@ class ReportBuilder {
                      {"input_path", info_.input_path},
                      {"control_path", info_.control_path}};
     root["datum"] = DatumJson();
+    // The control's frame in the world (bayon import_control's crs.json):
+    // the model's coordinates are the CRS's minus the origin.
+    const std::string crs_json =
+        info_.control_path.empty() ? "" : info_.control_path + "/crs.json";
+    if (!crs_json.empty() && std::filesystem::exists(crs_json)) {
+      root["georeference"] = Json::parse(ReadFileToString(crs_json));
+    }
     root["cameras"] = CamerasJson();
     root["steps"] = StepsJson();
     root["statistics"] = StatisticsJson();
@@ -937,6 +945,9 @@ AdjustmentOutputs MakeAdjustmentOutputs(const AdjustmentInput& input,
   }
   report["colmap_cameras"] = colmap;
   outputs.json = report.dump(1) + "\n";
+  if (report.contains("georeference")) {
+    outputs.crs_json = report["georeference"].dump(2) + "\n";
+  }
   outputs.text = Printout(report);
   for (const Json& c : colmap) {
     outputs.text += Printf(
@@ -960,6 +971,9 @@ void WriteAdjustmentOutputs(const AdjustmentOutputs& outputs,
   WriteCalibrationJson(output.File("calibration.json"), outputs.calibration);
   WriteFileAtomically(output.File("adjustment.json"), outputs.json);
   WriteFileAtomically(output.File("adjustment.txt"), outputs.text);
+  if (!outputs.crs_json.empty()) {
+    WriteFileAtomically(output.File("crs.json"), outputs.crs_json);
+  }
   output.Commit();
 }
 

@@ -45,6 +45,9 @@ struct AdjustmentOutputs {
   std::vector<CalibrationEntry> calibration;
   std::string json;  // adjustment.json
   std::string text;  // adjustment.txt
+  // The control's crs.json (bayon import_control), written beside the
+  // model so that it says where it lies in the world; empty: none.
+  std::string crs_json;
   // Key figures for the command's summary.
   double sigma0_px = 0;
   double check_rms_m = 0;  // 3D RMS over the check points; 0 without any
