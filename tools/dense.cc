@@ -8,6 +8,7 @@
 #include "ext/colmap/ply_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/georef/crs.h"
 #include "ext/image/image_io.h"
 #include "tools/command.h"
 #include "tools/commands.h"
@@ -360,6 +361,7 @@ int RunDense(int argc, char** argv) {
   WriteColmapFusedPly(cloud, fused_path, "bayon dense", &visibility);
   WriteFileAtomically(report_path,
                       ReportToJson(report, options).dump(2) + "\n");
+  CopyGeoFrame(in.input_path, output_folder.string());
   // A picture per master of what became of its cells.
   const fs::path rejects_folder = output_folder / "rejects";
   fs::create_directories(rejects_folder);

@@ -3,6 +3,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
+#include "ext/georef/crs.h"
 #include "ext/mesh/mesh_io.h"
 #include "ext/render/model_export.h"
 #include "ext/texture/texture_mapping.h"
@@ -231,6 +232,7 @@ int RunTexture(int argc, char** argv) {
     fs::rename(staging.File(name), file);
   }
   fs::rename(staging.File("texture.json"), report_path);
+  CopyGeoFrame(in.input_path, output_path);
   std::string written;
   for (const std::string& file : files) {
     written +=

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <proj.h>
 #include <regex>
 
@@ -159,6 +160,15 @@ GeoFrame ReadGeoFrame(const std::string& path) {
     ThrowInputError(path, ": not a bayon crs.json (", error.what(), ")");
   }
   return frame;
+}
+
+bool CopyGeoFrame(const std::string& model_folder,
+                  const std::string& output_folder) {
+  const std::string path = model_folder + "/crs.json";
+  if (!std::filesystem::exists(path)) return false;
+  // Read and written again: a malformed file is refused, not spread.
+  WriteGeoFrame(output_folder + "/crs.json", ReadGeoFrame(path));
+  return true;
 }
 
 }  // namespace bayon

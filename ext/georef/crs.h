@@ -64,4 +64,11 @@ class CrsTransform {
 void WriteGeoFrame(const std::string& path, const GeoFrame& frame);
 GeoFrame ReadGeoFrame(const std::string& path);
 
+// A model folder's crs.json (adjust writes the control's beside the
+// model), copied into `output_folder`, so that a cloud or a textured model
+// made from the model says where it lies in the world. False where the
+// model has none.
+bool CopyGeoFrame(const std::string& model_folder,
+                  const std::string& output_folder);
+
 }  // namespace bayon

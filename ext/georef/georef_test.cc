@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 
 #include "tests/testing.h"
@@ -48,9 +49,8 @@ TEST(Georef, WgsUtmRoundTripWithinAMillimetre) {
   }
   std::cout << "round trip: worst " << worst_m * 1000 << " mm\n";
   EXPECT_LT(worst_m, 0.001);
-  // Along a known point: the UTM zone 48 N coordinates of 13.4412 N,
-  // 103.8590 E agree with a second, independent path through ETRS-free
-  // PROJ strings.
+  // The same point through the zone's PROJ string (as OpenDroneMap's
+  // files may give it) lands at the same coordinates.
   const CrsTransform proj_string(
       "EPSG:4326",
       NormalizeCrs("+proj=utm +zone=48 +datum=WGS84 +units=m +no_defs"));
@@ -107,6 +107,11 @@ TEST(Georef, ImportsAnOdmGcpListIntoALocalFrame) {
   const GeoFrame frame = ReadGeoFrame(dir + "/control/crs.json");
   EXPECT_EQ(frame.origin, control.frame.origin);
   EXPECT_EQ(frame.crs, "EPSG:32648");
+  // Carried beside the products made from a model that has it.
+  std::filesystem::create_directories(dir + "/model");
+  EXPECT_TRUE(CopyGeoFrame(dir + "/control", dir + "/model"));
+  EXPECT_EQ(ReadGeoFrame(dir + "/model/crs.json").origin, frame.origin);
+  EXPECT_FALSE(CopyGeoFrame(dir + "/model/none", dir));
 
   // A photograph that is not the project's, named with the file.
   try {
