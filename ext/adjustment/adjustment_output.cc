@@ -6,6 +6,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 
+#include <glog/logging.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -118,8 +119,17 @@ class ReportBuilder {
     // the model's coordinates are the CRS's minus the origin.
     const std::string crs_json =
         info_.control_path.empty() ? "" : info_.control_path + "/crs.json";
+    // Only a block fitted to the control lies in its frame: a free or
+    // minimum datum (fewer than three control points) does not.
     if (!crs_json.empty() && std::filesystem::exists(crs_json)) {
-      root["georeference"] = Json::parse(ReadFileToString(crs_json));
+      if (input_.datum.type == DatumType::kControl) {
+        root["georeference"] = Json::parse(ReadFileToString(crs_json));
+      } else {
+        LOG(WARNING) << crs_json
+                     << ": not carried to the model, whose datum is "
+                     << DatumTypeName(input_.datum.type)
+                     << ", not the control's (it needs three control points)";
+      }
     }
     root["cameras"] = CamerasJson();
     root["steps"] = StepsJson();

@@ -28,8 +28,10 @@ struct SurveyPoint {
 
 struct SurveyFile {
   std::string crs;
+  std::string crs_source;  // where the CRS was named, for messages
   std::vector<SurveyPoint> points;
   std::vector<ImageMeasurement> measurements;
+  std::vector<int> measurement_lines;
 };
 
 std::string Trimmed(std::string text) {
@@ -119,6 +121,7 @@ SurveyFile ReadOdm(const std::string& path) {
   if (lines.empty()) ThrowInputError(path, ": empty (no CRS line)");
   SurveyFile file;
   file.crs = lines[0].second;
+  file.crs_source = StrCat(path, ":", lines[0].first);
   std::map<std::string, size_t> by_name;
   std::map<std::tuple<double, double, double>, std::string> unnamed;
   for (size_t i = 1; i < lines.size(); ++i) {
@@ -153,6 +156,7 @@ SurveyFile ReadOdm(const std::string& path) {
     m.xy = Eigen::Vector2d(Number(f[3], path, number, "im_x"),
                            Number(f[4], path, number, "im_y"));
     file.measurements.push_back(m);
+    file.measurement_lines.push_back(number);
     AddPoint(path, std::move(point), &by_name, &file.points);
   }
   return file;
@@ -160,6 +164,7 @@ SurveyFile ReadOdm(const std::string& path) {
 
 SurveyFile ReadCsv(const std::string& path, bool metashape) {
   SurveyFile file;
+  file.crs_source = "--crs";
   std::map<std::string, size_t> by_name;
   for (const auto& [number, line] : DataLines(path)) {
     const std::vector<std::string> f = Fields(line, true);
@@ -218,16 +223,15 @@ void CheckImages(const std::string& path,
                  const std::vector<std::string>& image_names) {
   if (image_names.empty()) return;
   const std::set<std::string> known(image_names.begin(), image_names.end());
-  std::map<std::string, int> line_of;
-  for (const SurveyPoint& point : file.points) line_of[point.name] = point.line;
-  for (const ImageMeasurement& m : file.measurements) {
+  for (size_t i = 0; i < file.measurements.size(); ++i) {
+    const ImageMeasurement& m = file.measurements[i];
     if (known.count(m.image_name)) continue;
     ThrowInputError(path,
+                    ":",
+                    file.measurement_lines[i],
                     ": GCP ",
                     m.point_name,
-                    " (line ",
-                    line_of[m.point_name],
-                    " or after) is measured in ",
+                    " is measured in ",
                     m.image_name,
                     ", which is not among the photographs");
   }
@@ -254,21 +258,24 @@ ImportedControl ImportControl(const std::string& path,
   SurveyFile file = options.format == "odm"
                         ? ReadOdm(path)
                         : ReadCsv(path, options.format == "metashape");
-  if (!options.crs.empty()) file.crs = options.crs;
+  if (!options.crs.empty()) {
+    file.crs = options.crs;
+    file.crs_source = "--crs";
+  }
   CheckImages(path, file, image_names);
 
   // The model's frame: the survey's own projected CRS, or the UTM zone of
   // geographic points; its origin the points' centroid, to the metre.
   ImportedControl control;
   control.frame.source_crs = file.crs;
-  const std::string source = NormalizeCrs(file.crs);
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const SurveyPoint& point : file.points) mean += point.xyz;
   mean /= static_cast<double>(file.points.size());
-  control.frame.crs =
-      IsGeographicCrs(source) ? UtmCrsFor(mean.x(), mean.y()) : source;
   std::vector<Eigen::Vector3d> projected;
-  {
+  try {
+    const std::string source = NormalizeCrs(file.crs);
+    control.frame.crs =
+        IsGeographicCrs(source) ? UtmCrsFor(mean.x(), mean.y()) : source;
     const CrsTransform transform(source, control.frame.crs);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const SurveyPoint& point : file.points) {
@@ -277,6 +284,9 @@ ImportedControl ImportControl(const std::string& path,
     }
     control.frame.origin =
         (sum / static_cast<double>(projected.size())).array().round().matrix();
+  } catch (const InputError& error) {
+    // Where the CRS was named: the file's first line, or --crs.
+    ThrowInputError(file.crs_source, ": ", error.what());
   }
   std::set<std::string> checks;
   for (const std::string& name : Fields(options.check_names, true)) {

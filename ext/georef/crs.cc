@@ -26,6 +26,15 @@ PJ* CreateCrs(PJ_CONTEXT* context, const std::string& crs) {
   return object;
 }
 
+// A context of our own that keeps quiet: PROJ's messages go to stderr,
+// where the command's one line about bad input is to be the only one; the
+// error is read from the context instead.
+PJ_CONTEXT* QuietContext() {
+  PJ_CONTEXT* context = proj_context_create();
+  proj_log_level(context, PJ_LOG_NONE);
+  return context;
+}
+
 std::string ProjError(PJ_CONTEXT* context) {
   const int error = proj_context_errno(context);
   return error == 0 ? "not a coordinate reference system"
@@ -54,7 +63,7 @@ std::string NormalizeCrs(const std::string& text) {
 }
 
 bool IsGeographicCrs(const std::string& crs) {
-  PJ_CONTEXT* context = proj_context_create();
+  PJ_CONTEXT* context = QuietContext();
   PJ* object = CreateCrs(context, crs);
   if (object == nullptr) {
     const std::string why = ProjError(context);
@@ -74,8 +83,7 @@ std::string UtmCrsFor(double longitude_deg, double latitude_deg) {
 }
 
 CrsTransform::CrsTransform(const std::string& from, const std::string& to)
-    : context_(proj_context_create()),
-      what_(StrCat("from ", from, " to ", to)) {
+    : context_(QuietContext()), what_(StrCat("from ", from, " to ", to)) {
   for (const std::string* crs : {&from, &to}) {
     PJ* object = CreateCrs(context_, *crs);
     if (object == nullptr) {
