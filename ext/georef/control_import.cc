@@ -264,8 +264,9 @@ ImportedControl ImportControl(const std::string& path,
   }
   CheckImages(path, file, image_names);
 
-  // The model's frame: the survey's own projected CRS, or the UTM zone of
-  // geographic points; its origin the points' centroid, to the metre.
+  // The model's frame: the survey's own projected CRS where it is in
+  // metres, else the UTM zone of the points; its origin the points'
+  // centroid, to the metre.
   ImportedControl control;
   control.frame.source_crs = file.crs;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -274,8 +275,7 @@ ImportedControl ImportControl(const std::string& path,
   std::vector<Eigen::Vector3d> projected;
   try {
     const std::string source = NormalizeCrs(file.crs);
-    control.frame.crs =
-        IsGeographicCrs(source) ? UtmCrsFor(mean.x(), mean.y()) : source;
+    control.frame.crs = LocalFrameCrs(source, mean);
     const CrsTransform transform(source, control.frame.crs);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const SurveyPoint& point : file.points) {

@@ -62,7 +62,7 @@ std::string NormalizeCrs(const std::string& text) {
   return text;
 }
 
-bool IsGeographicCrs(const std::string& crs) {
+bool IsMetricProjectedCrs(const std::string& crs) {
   PJ_CONTEXT* context = QuietContext();
   PJ* object = CreateCrs(context, crs);
   if (object == nullptr) {
@@ -70,16 +70,45 @@ bool IsGeographicCrs(const std::string& crs) {
     proj_context_destroy(context);
     ThrowInputError("unknown CRS '", crs, "' (PROJ: ", why, ")");
   }
-  const PJ_TYPE type = proj_get_type(object);
+  if (proj_get_type(object) == PJ_TYPE_COMPOUND_CRS) {
+    PJ* horizontal = proj_crs_get_sub_crs(context, object, 0);
+    proj_destroy(object);
+    object = horizontal;
+  }
+  bool metric = false;
+  if (object != nullptr && proj_get_type(object) == PJ_TYPE_PROJECTED_CRS) {
+    PJ* cs = proj_crs_get_coordinate_system(context, object);
+    double factor = 0;
+    metric = cs != nullptr &&
+             proj_cs_get_axis_info(context,
+                                   cs,
+                                   0,
+                                   nullptr,
+                                   nullptr,
+                                   nullptr,
+                                   &factor,
+                                   nullptr,
+                                   nullptr,
+                                   nullptr) &&
+             factor == 1.0;
+    proj_destroy(cs);
+  }
   proj_destroy(object);
   proj_context_destroy(context);
-  return type == PJ_TYPE_GEOGRAPHIC_2D_CRS || type == PJ_TYPE_GEOGRAPHIC_3D_CRS;
+  return metric;
 }
 
 std::string UtmCrsFor(double longitude_deg, double latitude_deg) {
   const int zone = std::clamp(
       static_cast<int>(std::floor((longitude_deg + 180) / 6)) + 1, 1, 60);
   return StrCat("EPSG:", (latitude_deg >= 0 ? 32600 : 32700) + zone);
+}
+
+std::string LocalFrameCrs(const std::string& crs,
+                          const Eigen::Vector3d& point) {
+  if (IsMetricProjectedCrs(crs)) return crs;
+  const Eigen::Vector3d lonlat = CrsTransform(crs, "EPSG:4326").Forward(point);
+  return UtmCrsFor(lonlat.x(), lonlat.y());
 }
 
 CrsTransform::CrsTransform(const std::string& from, const std::string& to)

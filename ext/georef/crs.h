@@ -2,11 +2,11 @@
 //
 // Coordinate reference systems through PROJ. A survey gives ground control
 // in a national or UTM grid, or in longitude and latitude; the model works
-// in a local projected frame: the survey's projected CRS (or, for
-// geographic coordinates, the UTM zone of the points) with an origin near
-// the object subtracted. Grid coordinates of a few million metres would
-// leave single precision (PLY, glTF) centimetres; the origin, stated with
-// the model (crs.json), is kept in double.
+// in a local projected frame: the survey's projected CRS where it is in
+// metres (else, for geographic coordinates or a grid in feet, the UTM zone
+// of the points) with an origin near the object subtracted. Grid coordinates of
+// a few million metres would leave single precision (PLY, glTF) centimetres;
+// the origin, stated with the model (crs.json), is kept in double.
 #pragma once
 
 #include <Eigen/Core>
@@ -31,12 +31,17 @@ struct GeoFrame {
 // other text (EPSG:xxxx, WKT) unchanged.
 std::string NormalizeCrs(const std::string& text);
 
-// True for longitude / latitude CRSs. Throws InputError for a CRS PROJ
-// does not know.
-bool IsGeographicCrs(const std::string& crs);
+// True for a projected CRS in metres (the horizontal part of a compound
+// one). Throws InputError for a CRS PROJ does not know.
+bool IsMetricProjectedCrs(const std::string& crs);
 
 // The WGS 84 UTM zone of a point, as "EPSG:326zz" (north) or "EPSG:327zz".
 std::string UtmCrsFor(double longitude_deg, double latitude_deg);
+
+// The projected CRS in metres a model made near `point` (in `crs`) works
+// in: `crs` itself where it is one, else the UTM zone of the point
+// (geographic coordinates, a grid in feet).
+std::string LocalFrameCrs(const std::string& crs, const Eigen::Vector3d& point);
 
 // A transformation between two CRSs, in east / north (longitude / latitude
 // in degrees) order whatever the CRSs' own axis order.

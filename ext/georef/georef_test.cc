@@ -25,10 +25,19 @@ TEST(Georef, WgsUtmRoundTripWithinAMillimetre) {
   EXPECT_EQ(NormalizeCrs("WGS84 UTM 19S"), "EPSG:32719");
   EXPECT_EQ(UtmCrsFor(103.8590, 13.4412), "EPSG:32648");
   EXPECT_EQ(UtmCrsFor(-70.6, -33.4), "EPSG:32719");
-  EXPECT_TRUE(IsGeographicCrs("EPSG:4326"));
-  EXPECT_FALSE(IsGeographicCrs("EPSG:32648"));
-  EXPECT_FALSE(IsGeographicCrs(
+  EXPECT_FALSE(IsMetricProjectedCrs("EPSG:4326"));
+  EXPECT_TRUE(IsMetricProjectedCrs("EPSG:32648"));
+  EXPECT_TRUE(IsMetricProjectedCrs(
       NormalizeCrs("+proj=utm +zone=48 +datum=WGS84 +units=m +no_defs")));
+  // A grid in US survey feet (New York Long Island) and a compound CRS
+  // (UTM with a height system).
+  EXPECT_FALSE(IsMetricProjectedCrs("EPSG:2263"));
+  EXPECT_TRUE(IsMetricProjectedCrs("EPSG:32632+5783"));
+  // Geographic points, and a grid in feet, work in their UTM zone.
+  EXPECT_EQ(LocalFrameCrs("EPSG:4326", Eigen::Vector3d(103.86, 13.44, 0)),
+            "EPSG:32648");
+  EXPECT_EQ(LocalFrameCrs("EPSG:2263", Eigen::Vector3d(987000, 210000, 0)),
+            "EPSG:32618");
   const CrsTransform transform("EPSG:4326", "EPSG:32648");
   double worst_m = 0;
   for (int i = 0; i < 25; ++i) {
@@ -68,7 +77,7 @@ TEST(Georef, UnknownCrsIsNamed) {
     EXPECT_NE(std::string(error.what()).find("EPSG:999999"), std::string::npos)
         << error.what();
   }
-  EXPECT_THROW(IsGeographicCrs("not a crs"), InputError);
+  EXPECT_THROW(IsMetricProjectedCrs("not a crs"), InputError);
 }
 
 // An OpenDroneMap gcp_list.txt in UTM: the points in the local frame (UTM
