@@ -208,6 +208,12 @@ int RunTexture(int argc, char** argv) {
       LoadTextureImages(scene, in.image_path, options);
   const double seconds_load = timer.Seconds();
   TexturedMesh textured = MapTexture(mesh, images, options);
+  // A georeferenced model says in its .glb where it lies (and beside it,
+  // crs.json, below).
+  if (fs::exists(in.input_path + "/crs.json")) {
+    export_options.georeference_json =
+        ReadFileToString(in.input_path + "/crs.json");
+  }
   textured.report.seconds_load = seconds_load;
   fs::create_directories(output_path);
   // The files are written into a temporary folder and moved in when all are

@@ -178,7 +178,8 @@ void PadTo4(std::string* text, char pad) {
 std::string GlbBytes(const TriangleMesh& mesh,
                      const Wedges& wedges,
                      const std::string& png,
-                     bool y_up) {
+                     bool y_up,
+                     const std::string& georeference_json) {
   // The binary chunk: positions, texture coordinates, indices, the PNG;
   // each view starts on a 4-byte boundary.
   std::string bin;
@@ -221,6 +222,10 @@ std::string GlbBytes(const TriangleMesh& mesh,
   using nlohmann::ordered_json;
   ordered_json json;
   json["asset"] = {{"version", "2.0"}, {"generator", "bayon"}};
+  if (!georeference_json.empty()) {
+    json["asset"]["extras"]["georeference"] =
+        ordered_json::parse(georeference_json);
+  }
   json["scene"] = 0;
   json["scenes"] = ordered_json::array({{{"nodes", {0}}}});
   ordered_json node = {{"name", "model"}, {"mesh", 0}};
@@ -1142,8 +1147,10 @@ std::vector<std::string> WriteTexturedModel(const TexturedModel& model,
     written.push_back(file(".wrl"));
   }
   if (options.gltf) {
-    WriteFileAtomically(file(".glb"),
-                        GlbBytes(mesh, wedges, png, options.gltf_y_up));
+    WriteFileAtomically(
+        file(".glb"),
+        GlbBytes(
+            mesh, wedges, png, options.gltf_y_up, options.georeference_json));
     written.push_back(file(".glb"));
   }
   return written;

@@ -51,6 +51,10 @@ struct ModelExportOptions {
   // rotation that stands the model upright in glTF viewers (the positions
   // stay in the datum). Off: the node has no transform.
   bool gltf_y_up = true;
+  // Where the model lies in the world: a crs.json (bayon import_control;
+  // the CRS and the origin the model's coordinates are relative to), put
+  // into the .glb as asset.extras.georeference. Empty: none.
+  std::string georeference_json;
 };
 
 // The paths written, in the order above (the PNG atlas first).

@@ -182,6 +182,28 @@ TEST(ModelExport, GlbKeepsAGeoreferencedModelToATenthOfAMillimetre) {
   }
 }
 
+// A georeferenced model says in its .glb where it lies: the CRS and the
+// origin its coordinates are relative to (asset.extras.georeference).
+TEST(ModelExport, GlbCarriesTheGeoreference) {
+  const std::string dir = testing::TempDir("model_export_georeference");
+  ModelExportOptions options;
+  options.obj = options.ply = options.vrml = false;
+  options.georeference_json =
+      R"({"source_crs": "WGS84 UTM 48N", "crs": "EPSG:32648", )"
+      R"("origin": [372000.0, 1486000.0, 22.0]})";
+  WriteTexturedModel(CubeModel(), dir, options);
+  const std::string bytes = ReadFileToString(dir + "/model.glb");
+  ASSERT_GE(bytes.size(), 20u);
+  const nlohmann::json json =
+      nlohmann::json::parse(bytes.substr(20, U32(bytes, 12)));
+  const nlohmann::json& georeference = json["asset"]["extras"]["georeference"];
+  EXPECT_EQ(georeference["crs"], "EPSG:32648");
+  EXPECT_EQ(georeference["origin"][1], 1486000.0);
+  // Still a model any reader opens.
+  EXPECT_EQ(ReadTexturedModel(dir + "/model.glb").mesh.NumFaces(),
+            CubeModel().mesh.NumFaces());
+}
+
 TEST(ModelExport, GltfSplitsVerticesOnlyWhereTexcoordsDiffer) {
   const TexturedModel grid = GridModel();
   const std::string dir = testing::TempDir("model_export_grid");
