@@ -4,6 +4,7 @@
 #include "ext/adjustment/adjustment_output.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/georef/crs.h"
 #include "tools/command.h"
 #include "tools/commands.h"
 
@@ -152,6 +153,11 @@ int RunAdjust(int argc, char** argv) {
   options.Check();
   input_options.Check();
   CheckOutputPath(output_path, overwrite);
+  // The control's frame (import_control) goes with the model: checked
+  // before the work, not after it.
+  if (!control_path.empty() && fs::exists(control_path + "/crs.json")) {
+    ReadGeoFrame(control_path + "/crs.json");
+  }
   if (log_path.empty()) {
     // sparse/<name> sits two levels below the workspace.
     const fs::path workspace =

@@ -39,7 +39,7 @@ int RunImportControl(int argc, char** argv) {
       "measurements), Metashape's reference CSV or a plain CSV (points; "
       "--crs names their CRS). Geographic and projected coordinates go "
       "through PROJ into a local projected frame (the survey's projected "
-      "CRS where it is in metres, else the UTM zone of the points) with an "
+      "CRS where it is in metres, the UTM zone of geographic points) with an "
       "origin near the "
       "points subtracted; writes points.txt, observations.txt and crs.json "
       "(the CRS and the origin) into --output_path, a workspace's control/.");

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -21,7 +22,9 @@ namespace fs = std::filesystem;
 struct SurveyPoint {
   std::string name;
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
-  Eigen::Vector3d sigma = Eigen::Vector3d::Constant(-1);  // < 0: not given
+  // NaN: not given (the --sigma_m default).
+  Eigen::Vector3d sigma =
+      Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   ControlPointType type = ControlPointType::kControl;
   int line = 0;
 };
@@ -56,6 +59,15 @@ std::vector<std::string> Fields(const std::string& line, bool commas) {
     while (stream >> field) fields.push_back(field);
   }
   return fields;
+}
+
+// bayon's control files separate fields by white space: Metashape's
+// "point 1" becomes "point_1".
+std::string NameWithoutSpaces(std::string name) {
+  for (char& c : name) {
+    if (std::isspace(static_cast<unsigned char>(c))) c = '_';
+  }
+  return name;
 }
 
 bool IsNumber(const std::string& text) {
@@ -153,12 +165,16 @@ SurveyFile ReadOdm(const std::string& path) {
     ImageMeasurement m;
     m.point_name = point.name;
     m.image_name = f[5];
-    m.xy = Eigen::Vector2d(Number(f[3], path, number, "im_x"),
-                           Number(f[4], path, number, "im_y"));
+    // OpenSfM's pixels have the upper-left pixel's centre at (0, 0),
+    // COLMAP's (bayon's) at (0.5, 0.5).
+    m.xy = Eigen::Vector2d(Number(f[3], path, number, "im_x") + 0.5,
+                           Number(f[4], path, number, "im_y") + 0.5);
     file.measurements.push_back(m);
     file.measurement_lines.push_back(number);
     AddPoint(path, std::move(point), &by_name, &file.points);
   }
+  if (file.points.empty())
+    ThrowInputError(path, ": no GCP lines after the CRS");
   return file;
 }
 
@@ -166,10 +182,14 @@ SurveyFile ReadCsv(const std::string& path, bool metashape) {
   SurveyFile file;
   file.crs_source = "--crs";
   std::map<std::string, size_t> by_name;
+  bool first = true;
   for (const auto& [number, line] : DataLines(path)) {
     const std::vector<std::string> f = Fields(line, true);
-    // A header ("Label,X/East,...") has no number where x is.
-    if (f.size() >= 2 && !IsNumber(f[1])) continue;
+    // A header ("Label,X/East,...") has no number where x is; only the
+    // first line may be one.
+    const bool header = first && f.size() >= 2 && !IsNumber(f[1]);
+    first = false;
+    if (header) continue;
     if (f.size() < 4) {
       ThrowInputError(path,
                       ":",
@@ -183,7 +203,7 @@ SurveyFile ReadCsv(const std::string& path, bool metashape) {
     }
     SurveyPoint point;
     point.line = number;
-    point.name = f[0];
+    point.name = NameWithoutSpaces(f[0]);
     point.xyz = Eigen::Vector3d(Number(f[1], path, number, "x"),
                                 Number(f[2], path, number, "y"),
                                 Number(f[3], path, number, "z"));
@@ -208,7 +228,7 @@ SurveyFile ReadCsv(const std::string& path, bool metashape) {
                                      : ControlPointType::kControl;
       }
     }
-    if ((point.sigma.array() < 0).any() && (point.sigma.array() >= 0).any()) {
+    if (point.sigma.allFinite() && (point.sigma.array() < 0).any()) {
       ThrowInputError(path, ":", number, ": a negative standard deviation");
     }
     AddPoint(path, std::move(point), &by_name, &file.points);
@@ -297,9 +317,9 @@ ImportedControl ImportControl(const std::string& path,
     ControlPoint point;
     point.name = survey.name;
     point.xyz = projected[i] - control.frame.origin;
-    point.sigma = (survey.sigma.array() < 0).any()
-                      ? Eigen::Vector3d::Constant(options.sigma_m)
-                      : survey.sigma;
+    point.sigma = survey.sigma.allFinite()
+                      ? survey.sigma
+                      : Eigen::Vector3d::Constant(options.sigma_m);
     point.type =
         checks.erase(survey.name) ? ControlPointType::kCheck : survey.type;
     control.points.push_back(point);
@@ -318,6 +338,9 @@ void WriteImportedControl(const std::string& folder,
   WriteControlPoints(folder + "/points.txt", control.points);
   if (!control.measurements.empty()) {
     WriteImageMeasurements(folder + "/observations.txt", control.measurements);
+  } else {
+    // An earlier import's measurements are not this survey's.
+    fs::remove(folder + "/observations.txt");
   }
   WriteGeoFrame(folder + "/crs.json", control.frame);
 }

@@ -62,7 +62,13 @@ std::string NormalizeCrs(const std::string& text) {
   return text;
 }
 
-bool IsMetricProjectedCrs(const std::string& crs) {
+namespace {
+
+// What a CRS's horizontal part is (a compound CRS's first component, a
+// bound CRS's source): projected in metres, geographic, or another kind.
+enum class Horizontal { kMetricProjected, kGeographic, kOther };
+
+Horizontal HorizontalKind(const std::string& crs) {
   PJ_CONTEXT* context = QuietContext();
   PJ* object = CreateCrs(context, crs);
   if (object == nullptr) {
@@ -70,32 +76,51 @@ bool IsMetricProjectedCrs(const std::string& crs) {
     proj_context_destroy(context);
     ThrowInputError("unknown CRS '", crs, "' (PROJ: ", why, ")");
   }
-  if (proj_get_type(object) == PJ_TYPE_COMPOUND_CRS) {
-    PJ* horizontal = proj_crs_get_sub_crs(context, object, 0);
+  for (int unwrap = 0; unwrap < 2 && object != nullptr; ++unwrap) {
+    PJ* inner = nullptr;
+    if (proj_get_type(object) == PJ_TYPE_COMPOUND_CRS) {
+      inner = proj_crs_get_sub_crs(context, object, 0);
+    } else if (proj_get_type(object) == PJ_TYPE_BOUND_CRS) {
+      inner = proj_get_source_crs(context, object);
+    } else {
+      break;
+    }
     proj_destroy(object);
-    object = horizontal;
+    object = inner;
   }
-  bool metric = false;
-  if (object != nullptr && proj_get_type(object) == PJ_TYPE_PROJECTED_CRS) {
+  Horizontal kind = Horizontal::kOther;
+  const PJ_TYPE type =
+      object == nullptr ? PJ_TYPE_UNKNOWN : proj_get_type(object);
+  if (type == PJ_TYPE_GEOGRAPHIC_2D_CRS || type == PJ_TYPE_GEOGRAPHIC_3D_CRS) {
+    kind = Horizontal::kGeographic;
+  } else if (type == PJ_TYPE_PROJECTED_CRS) {
     PJ* cs = proj_crs_get_coordinate_system(context, object);
     double factor = 0;
-    metric = cs != nullptr &&
-             proj_cs_get_axis_info(context,
-                                   cs,
-                                   0,
-                                   nullptr,
-                                   nullptr,
-                                   nullptr,
-                                   &factor,
-                                   nullptr,
-                                   nullptr,
-                                   nullptr) &&
-             factor == 1.0;
+    if (cs != nullptr &&
+        proj_cs_get_axis_info(context,
+                              cs,
+                              0,
+                              nullptr,
+                              nullptr,
+                              nullptr,
+                              &factor,
+                              nullptr,
+                              nullptr,
+                              nullptr) &&
+        factor == 1.0) {
+      kind = Horizontal::kMetricProjected;
+    }
     proj_destroy(cs);
   }
   proj_destroy(object);
   proj_context_destroy(context);
-  return metric;
+  return kind;
+}
+
+}  // namespace
+
+bool IsMetricProjectedCrs(const std::string& crs) {
+  return HorizontalKind(crs) == Horizontal::kMetricProjected;
 }
 
 std::string UtmCrsFor(double longitude_deg, double latitude_deg) {
@@ -106,9 +131,22 @@ std::string UtmCrsFor(double longitude_deg, double latitude_deg) {
 
 std::string LocalFrameCrs(const std::string& crs,
                           const Eigen::Vector3d& point) {
-  if (IsMetricProjectedCrs(crs)) return crs;
-  const Eigen::Vector3d lonlat = CrsTransform(crs, "EPSG:4326").Forward(point);
-  return UtmCrsFor(lonlat.x(), lonlat.y());
+  switch (HorizontalKind(crs)) {
+    case Horizontal::kMetricProjected:
+      return crs;
+    case Horizontal::kGeographic: {
+      const Eigen::Vector3d lonlat =
+          CrsTransform(crs, "EPSG:4326").Forward(point);
+      return UtmCrsFor(lonlat.x(), lonlat.y());
+    }
+    case Horizontal::kOther:
+      break;
+  }
+  ThrowInputError("CRS '",
+                  crs,
+                  "' is neither geographic nor projected in metres (a grid "
+                  "in feet would keep its heights in feet); give the "
+                  "coordinates in a metric CRS");
 }
 
 CrsTransform::CrsTransform(const std::string& from, const std::string& to)
@@ -202,7 +240,11 @@ GeoFrame ReadGeoFrame(const std::string& path) {
 bool CopyGeoFrame(const std::string& model_folder,
                   const std::string& output_folder) {
   const std::string path = model_folder + "/crs.json";
-  if (!std::filesystem::exists(path)) return false;
+  if (!std::filesystem::exists(path)) {
+    // An earlier model's frame is not this one's.
+    std::filesystem::remove(output_folder + "/crs.json");
+    return false;
+  }
   // Read and written again: a malformed file is refused, not spread.
   WriteGeoFrame(output_folder + "/crs.json", ReadGeoFrame(path));
   return true;

@@ -3,8 +3,8 @@
 // Coordinate reference systems through PROJ. A survey gives ground control
 // in a national or UTM grid, or in longitude and latitude; the model works
 // in a local projected frame: the survey's projected CRS where it is in
-// metres (else, for geographic coordinates or a grid in feet, the UTM zone
-// of the points) with an origin near the object subtracted. Grid coordinates of
+// metres (for geographic coordinates, the UTM zone of the points) with an
+// origin near the object subtracted. Grid coordinates of
 // a few million metres would leave single precision (PLY, glTF) centimetres;
 // the origin, stated with the model (crs.json), is kept in double.
 #pragma once
@@ -39,8 +39,10 @@ bool IsMetricProjectedCrs(const std::string& crs);
 std::string UtmCrsFor(double longitude_deg, double latitude_deg);
 
 // The projected CRS in metres a model made near `point` (in `crs`) works
-// in: `crs` itself where it is one, else the UTM zone of the point
-// (geographic coordinates, a grid in feet).
+// in: `crs` itself where it is one, else (geographic coordinates) the UTM
+// zone of the point. A projected grid in other units (feet) is refused
+// with InputError: PROJ would convert its eastings and northings but not
+// its heights.
 std::string LocalFrameCrs(const std::string& crs, const Eigen::Vector3d& point);
 
 // A transformation between two CRSs, in east / north (longitude / latitude
@@ -72,7 +74,7 @@ GeoFrame ReadGeoFrame(const std::string& path);
 // A model folder's crs.json (adjust writes the control's beside the
 // model), copied into `output_folder`, so that a cloud or a textured model
 // made from the model says where it lies in the world. False where the
-// model has none.
+// model has none (an earlier crs.json in `output_folder` is removed).
 bool CopyGeoFrame(const std::string& model_folder,
                   const std::string& output_folder);
 

@@ -33,11 +33,17 @@ TEST(Georef, WgsUtmRoundTripWithinAMillimetre) {
   // (UTM with a height system).
   EXPECT_FALSE(IsMetricProjectedCrs("EPSG:2263"));
   EXPECT_TRUE(IsMetricProjectedCrs("EPSG:32632+5783"));
-  // Geographic points, and a grid in feet, work in their UTM zone.
+  // Geographic points work in their UTM zone; a grid in feet is refused
+  // (PROJ would keep its heights in feet).
   EXPECT_EQ(LocalFrameCrs("EPSG:4326", Eigen::Vector3d(103.86, 13.44, 0)),
             "EPSG:32648");
-  EXPECT_EQ(LocalFrameCrs("EPSG:2263", Eigen::Vector3d(987000, 210000, 0)),
-            "EPSG:32618");
+  EXPECT_EQ(LocalFrameCrs("EPSG:32648", Eigen::Vector3d(372000, 1486000, 0)),
+            "EPSG:32648");
+  EXPECT_THROW(LocalFrameCrs("EPSG:2263", Eigen::Vector3d(987000, 210000, 0)),
+               InputError);
+  // A grid with its datum shift attached (a bound CRS) is still that grid.
+  EXPECT_TRUE(IsMetricProjectedCrs(NormalizeCrs(
+      "+proj=utm +zone=32 +ellps=intl +towgs84=-87,-98,-121 +units=m")));
   const CrsTransform transform("EPSG:4326", "EPSG:32648");
   double worst_m = 0;
   for (int i = 0; i < 25; ++i) {
@@ -107,7 +113,8 @@ TEST(Georef, ImportsAnOdmGcpListIntoALocalFrame) {
   EXPECT_EQ(control.points[2].type, ControlPointType::kCheck);
   ASSERT_EQ(control.measurements.size(), 4u);
   EXPECT_EQ(control.measurements[1].image_name, "b.jpg");
-  EXPECT_EQ(control.measurements[1].xy, Eigen::Vector2d(110.5, 210.25));
+  // OpenSfM's pixel centres are whole numbers, COLMAP's half ones.
+  EXPECT_EQ(control.measurements[1].xy, Eigen::Vector2d(111.0, 210.75));
 
   WriteImportedControl(dir + "/control", control);
   EXPECT_EQ(ReadControlPoints(dir + "/control/points.txt").size(), 3u);
@@ -156,6 +163,10 @@ TEST(Georef, ImportsAnOdmGcpListIntoALocalFrame) {
   }
   options.check_names = "P9";
   EXPECT_THROW(ImportControl(path, options, {}), InputError);
+  // A CRS line and no GCP.
+  std::ofstream(dir + "/empty.txt") << "EPSG:32648\n";
+  EXPECT_THROW(ImportControl(dir + "/empty.txt", ControlImportOptions(), {}),
+               InputError);
 }
 
 // Geographic coordinates (a CSV in EPSG:4326, longitude first) land in
@@ -195,6 +206,23 @@ TEST(Georef, ImportsGeographicCsvAndMetashapeReference) {
   EXPECT_EQ(reference.points[0].name, "GCP1");
   EXPECT_EQ(reference.points[0].sigma, Eigen::Vector3d::Constant(0.03));
   EXPECT_EQ(reference.points[1].sigma, Eigen::Vector3d::Constant(0.05));
+  // Metashape's "point 1" in a file of white-space separated fields.
+  std::ofstream(dir + "/labels.csv") << "point 1,372001.25,1486002.50,21.0\n";
+  EXPECT_EQ(ImportControl(dir + "/labels.csv", options, {}).points[0].name,
+            "point_1");
+  // A negative accuracy, and a line whose x is no number after the
+  // header: each named with its line.
+  std::ofstream(dir + "/negative.csv") << "GCP1,372001.25,1486002.50,21,-0.1\n";
+  EXPECT_THROW(ImportControl(dir + "/negative.csv", options, {}), InputError);
+  std::ofstream(dir + "/typo.csv") << "Label,X,Y,Z\nGCP1,372001,1486002,21\n"
+                                      "GCP2,3720O1,1486002,21\n";
+  try {
+    ImportControl(dir + "/typo.csv", options, {});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("typo.csv:3"), std::string::npos)
+        << error.what();
+  }
   // csv without a CRS: refused before reading.
   options.crs.clear();
   EXPECT_THROW(ImportControl(dir + "/reference.csv", options, {}), InputError);
