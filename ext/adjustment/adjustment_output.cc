@@ -462,8 +462,13 @@ class ReportBuilder {
       const Eigen::Vector3d std_dev = StdDevs(precision_.point_covariance[i]);
       const Eigen::Vector3d difference_std_dev =
           (std_dev.cwiseAbs2() + point.given_sigma.cwiseAbs2()).cwiseSqrt();
-      const double normalized =
-          difference.cwiseQuotient(difference_std_dev).cwiseAbs().maxCoeff();
+      double normalized = 0;  // over the axes with a standard deviation
+      for (int k = 0; k < 3; ++k) {
+        if (difference_std_dev[k] > 0) {
+          normalized = std::max(
+              normalized, std::abs(difference[k]) / difference_std_dev[k]);
+        }
+      }
       max_normalized = std::max(max_normalized, normalized);
       points.push_back({{"name", point.name},
                         {"given", Vec(point.given_xyz)},

@@ -3,6 +3,7 @@
 
 #include "ext/colmap/control_io.h"
 #include "ext/colmap/database.h"
+#include "ext/colmap/table_features.h"
 #include "ext/colmap/table_matches.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
@@ -125,6 +126,9 @@ struct TieImage {
   DatabaseImage image;
   cv::Mat gray;  // CV_32F, 0..255
   FeatureKeypoints keypoints;
+  // Rows that are coded targets (bayon_keypoint_targets): no candidates,
+  // for the targets come in as named points.
+  std::set<uint32_t> target_rows;
 };
 
 // The surfaces of the database, by (searched from, searched in).
@@ -444,6 +448,7 @@ std::vector<Eigen::Vector2d> SelectCandidates(const TieImage& image,
   std::vector<std::vector<std::pair<double, Eigen::Vector2d>>> cells(
       options.grid_cols * options.grid_rows);
   for (int i = 0; i < static_cast<int>(image.keypoints.rows()); ++i) {
+    if (image.target_rows.count(static_cast<uint32_t>(i))) continue;
     const Eigen::Vector2d xy = KeypointXY(image.keypoints, i);
     const double score = PatchTextureScore(gray, xy, radius);
     if (!(score >= options.min_texture_score) || score <= 0) continue;
@@ -541,6 +546,12 @@ Input ReadInput(const std::string& database_path,
     entry.image = image;
     if (database.ExistsKeypoints(image.image_id)) {
       entry.keypoints = database.ReadKeypoints(image.image_id);
+      for (const KeypointTarget& target :
+           ReadKeypointTargets(&database,
+                               image.image_id,
+                               static_cast<int>(entry.keypoints.rows()))) {
+        entry.target_rows.insert(target.point2D_idx);
+      }
     }
     input.images.emplace(image.image_id, std::move(entry));
   }

@@ -159,11 +159,16 @@ void OrientPair(const std::map<image_t, FeatureKeypoints>& keypoints,
   }
   const std::vector<int> kept =
       PointsAgreeingWithTargets(points, is_target, estimation, &report);
-  if (static_cast<int>(kept.size()) == points.size()) {
+  const bool anchored = static_cast<int>(kept.size()) != points.size();
+  job->result = EstimateRelativeOrientation(
+      anchored ? SubsetOf(points, kept) : points, estimation);
+  if (anchored && !job->result.success) {
+    // The targets' orientation kept too few points to orient the pair (or
+    // a wrong one, from targets on one wall): all of them, as without
+    // targets.
+    report.anchored_by_targets = false;
     job->result = EstimateRelativeOrientation(points, estimation);
-  } else {
-    job->result =
-        EstimateRelativeOrientation(SubsetOf(points, kept), estimation);
+  } else if (anchored) {
     // Back to the conjugate points' order; those left out are blunders.
     std::vector<int> kept_rows;
     std::vector<uint8_t> inliers;
