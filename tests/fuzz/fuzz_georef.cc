@@ -19,8 +19,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   options.format = kFormats[data[0] % 3];
   if ((data[0] / 3) % 2 == 1) options.crs = "EPSG:32648";
   const std::string path = fuzz::FreshPath("survey.txt");
-  fuzz::WriteFile(path,
-                  std::string(reinterpret_cast<const char*>(data) + 1, size - 1));
+  fuzz::WriteFile(
+      path, std::string(reinterpret_cast<const char*>(data) + 1, size - 1));
   fuzz::Expect([&] { ImportControl(path, options, {"a.jpg", "b.jpg"}); });
   return 0;
 }
