@@ -611,11 +611,7 @@ std::set<size_t> TakeControlFromNamedTiePoints(
       m.point_name = tie.name;
       m.image_name = image->second;
       m.xy = observation.xy;
-      m.sigma_px = std::sqrt(std::max(
-          0.0,
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(observation.covariance)
-              .eigenvalues()
-              .maxCoeff()));
+      m.sigma_px = MeasurementSigma(observation.covariance);
       control->measurements.push_back(m);
     }
   }

@@ -4,6 +4,9 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -177,6 +180,14 @@ void WriteDistances(const std::string& path,
     out << "\n";
   }
   WriteFileAtomically(path, out.str());
+}
+
+double MeasurementSigma(const Eigen::Matrix2d& covariance) {
+  return std::sqrt(
+      std::max(0.0,
+               Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance)
+                   .eigenvalues()
+                   .maxCoeff()));
 }
 
 }  // namespace bayon

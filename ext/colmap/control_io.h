@@ -53,6 +53,11 @@ struct DistanceObservation {
   bool vertical = false;
 };
 
+// The SIGMA of an image measurement measured with a covariance (pixels^2):
+// its larger axis, so that the stated precision is never better than the
+// covariance's in any direction.
+double MeasurementSigma(const Eigen::Matrix2d& covariance);
+
 // Readers throw InputError "path:line: what is wrong" for malformed lines,
 // non-finite numbers, negative standard deviations and duplicate records.
 std::vector<ControlPoint> ReadControlPoints(const std::string& path);

@@ -9,8 +9,6 @@
 #include "ext/core/statistics.h"
 #include "ext/image/image_io.h"
 
-#include <Eigen/Eigenvalues>
-
 #include <filesystem>
 #include <set>
 
@@ -85,10 +83,7 @@ CodedTargetSummary FindCodedTargets(const std::string& database_path,
       m.point_name = target.name;
       m.image_name = names[i];
       m.xy = target.centre;
-      m.sigma_px = std::sqrt(
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(target.covariance)
-              .eigenvalues()
-              .maxCoeff());
+      m.sigma_px = MeasurementSigma(target.covariance);
       sigmas.push_back(m.sigma_px);
       distinct.insert(target.name);
     }
