@@ -43,7 +43,7 @@ struct StripImage {
   // Keypoint rows that are coded targets: their matches oriented the pairs
   // but make no tracks, for the targets come in as named tie points (or
   // control points), once.
-  std::set<int> target_rows;
+  std::set<uint32_t> target_rows;
   std::vector<Eigen::Matrix2d> tie_covariances;
   ImageFrame frame;
   bool placed = false;
@@ -147,10 +147,8 @@ class StripBuilder {
       image.camera_idx = camera_idxs.at(row.camera_id);
       image.keypoints = database.ReadKeypoints(row.image_id);
       image.num_keypoints = static_cast<int>(image.keypoints.rows());
-      for (const KeypointTarget& target :
-           ReadKeypointTargets(&database, row.image_id, image.num_keypoints)) {
-        image.target_rows.insert(static_cast<int>(target.point2D_idx));
-      }
+      image.target_rows =
+          KeypointTargetRows(&database, row.image_id, image.num_keypoints);
       // A measured frame (film scans) replaces the camera's default; a
       // digital image's row does not, as it may hold the default frame of
       // another camera (InteriorRecord::MeasuredFrame()).
@@ -318,11 +316,10 @@ class StripBuilder {
     for (const auto& [pair, geometry] : geometries_) {
       if (!use_matches_) break;
       const FeatureMatches& matches = geometry.inlier_matches;
-      const std::set<int>& targets1 = images_[pair.first].target_rows;
-      const std::set<int>& targets2 = images_[pair.second].target_rows;
+      const std::set<uint32_t>& targets1 = images_[pair.first].target_rows;
+      const std::set<uint32_t>& targets2 = images_[pair.second].target_rows;
       for (Eigen::Index m = 0; m < matches.rows(); ++m) {
-        if (targets1.count(static_cast<int>(matches(m, 0))) ||
-            targets2.count(static_cast<int>(matches(m, 1)))) {
+        if (targets1.count(matches(m, 0)) || targets2.count(matches(m, 1))) {
           continue;
         }
         sets.Union(element(pair.first, matches(m, 0)),

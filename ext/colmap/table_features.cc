@@ -144,6 +144,17 @@ std::vector<KeypointTarget> ReadKeypointTargets(Database* database,
   return targets;
 }
 
+std::set<uint32_t> KeypointTargetRows(Database* database,
+                                      image_t image_id,
+                                      int num_keypoints) {
+  std::set<uint32_t> rows;
+  for (const KeypointTarget& target :
+       ReadKeypointTargets(database, image_id, num_keypoints)) {
+    rows.insert(target.point2D_idx);
+  }
+  return rows;
+}
+
 void DeleteKeypointTargets(Database* database, image_t image_id) {
   if (!BayonTableExists(database, kKeypointTargetsTable.name)) return;
   SqliteStatement statement(

@@ -10,6 +10,7 @@
 #include "ext/colmap/bayon_tables.h"
 
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,11 @@ void WriteKeypointTargets(Database* database,
 std::vector<KeypointTarget> ReadKeypointTargets(Database* database,
                                                 image_t image_id,
                                                 int num_keypoints);
+// Just the rows of an image's targets (none where the record is stale), for
+// the stages that keep them out of their own use of the keypoints.
+std::set<uint32_t> KeypointTargetRows(Database* database,
+                                      image_t image_id,
+                                      int num_keypoints);
 void DeleteKeypointTargets(Database* database, image_t image_id);
 
 }  // namespace bayon

@@ -546,12 +546,8 @@ Input ReadInput(const std::string& database_path,
     entry.image = image;
     if (database.ExistsKeypoints(image.image_id)) {
       entry.keypoints = database.ReadKeypoints(image.image_id);
-      for (const KeypointTarget& target :
-           ReadKeypointTargets(&database,
-                               image.image_id,
-                               static_cast<int>(entry.keypoints.rows()))) {
-        entry.target_rows.insert(target.point2D_idx);
-      }
+      entry.target_rows = KeypointTargetRows(
+          &database, image.image_id, static_cast<int>(entry.keypoints.rows()));
     }
     input.images.emplace(image.image_id, std::move(entry));
   }

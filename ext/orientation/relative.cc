@@ -471,14 +471,12 @@ RelativeSummary OrientImagePairs(const std::string& database_path,
       for (image_t id : {id1, id2}) {
         if (keypoints.count(id)) continue;
         keypoints[id] = database.ReadKeypoints(id);
-        for (const KeypointTarget& target : ReadKeypointTargets(
-                 &database, id, static_cast<int>(keypoints[id].rows()))) {
-          target_rows[id].insert(target.point2D_idx);
-        }
+        target_rows[id] = KeypointTargetRows(
+            &database, id, static_cast<int>(keypoints[id].rows()));
       }
       job.matches = std::move(matches);
       job.match_record = ReadMatchRecord(&database, id1, id2);
-      if (target_rows.count(id1) && target_rows.count(id2)) {
+      if (!target_rows[id1].empty() && !target_rows[id2].empty()) {
         job.row_is_target.assign(job.matches.rows(), 0);
         for (int r = 0; r < job.matches.rows(); ++r) {
           job.row_is_target[r] = target_rows[id1].count(job.matches(r, 0)) &&
