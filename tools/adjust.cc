@@ -153,11 +153,10 @@ int RunAdjust(int argc, char** argv) {
   options.Check();
   input_options.Check();
   CheckOutputPath(output_path, overwrite);
-  // The control's frame (import_control) goes with the model: checked
-  // before the work, not after it.
-  if (!control_path.empty() && fs::exists(control_path + "/crs.json")) {
-    ReadGeoFrame(control_path + "/crs.json");
-  }
+  // The control's frame (import_control) goes with the model: read before
+  // the work, not after it.
+  const std::optional<GeoFrame> frame =
+      control_path.empty() ? std::nullopt : ReadModelGeoFrame(control_path);
   if (log_path.empty()) {
     // sparse/<name> sits two levels below the workspace.
     const fs::path workspace =
@@ -174,6 +173,7 @@ int RunAdjust(int argc, char** argv) {
   info.database_path = database_path;
   info.input_path = input_path;
   info.control_path = control_path;
+  if (frame) info.georeference_json = GeoFrameJson(*frame);
   info.self_calibration = self_calibration;
   info.blunder_detection = blunders;
   const AdjustmentOutputs outputs =

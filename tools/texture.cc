@@ -210,10 +210,8 @@ int RunTexture(int argc, char** argv) {
   TexturedMesh textured = MapTexture(mesh, images, options);
   // A georeferenced model says in its .glb where it lies (and beside it,
   // crs.json, below).
-  if (fs::exists(in.input_path + "/crs.json")) {
-    export_options.georeference_json =
-        ReadFileToString(in.input_path + "/crs.json");
-  }
+  const std::optional<GeoFrame> frame = ReadModelGeoFrame(in.input_path);
+  if (frame) export_options.georeference_json = GeoFrameJson(*frame);
   textured.report.seconds_load = seconds_load;
   fs::create_directories(output_path);
   // The files are written into a temporary folder and moved in when all are
@@ -238,7 +236,7 @@ int RunTexture(int argc, char** argv) {
     fs::rename(staging.File(name), file);
   }
   fs::rename(staging.File("texture.json"), report_path);
-  CopyGeoFrame(in.input_path, output_path);
+  PlaceGeoFrame(frame, output_path);
   std::string written;
   for (const std::string& file : files) {
     written +=

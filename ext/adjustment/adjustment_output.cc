@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
-#include <filesystem>
 #include <map>
 
 namespace bayon {
@@ -116,17 +115,15 @@ class ReportBuilder {
                      {"control_path", info_.control_path}};
     root["datum"] = DatumJson();
     // The control's frame in the world (bayon import_control's crs.json):
-    // the model's coordinates are the CRS's minus the origin.
-    const std::string crs_json =
-        info_.control_path.empty() ? "" : info_.control_path + "/crs.json";
-    // Only a block fitted to the control lies in its frame: a free or
-    // minimum datum (fewer than three control points) does not.
-    if (!crs_json.empty() && std::filesystem::exists(crs_json)) {
+    // the model's coordinates are the CRS's minus the origin. Only a block
+    // fitted to the control lies in that frame: a free or minimum datum
+    // (fewer than three control points) does not.
+    if (!info_.georeference_json.empty()) {
       if (input_.datum.type == DatumType::kControl) {
-        root["georeference"] = Json::parse(ReadFileToString(crs_json));
+        root["georeference"] = Json::parse(info_.georeference_json);
       } else {
-        LOG(WARNING) << crs_json
-                     << ": not carried to the model, whose datum is "
+        LOG(WARNING) << info_.control_path
+                     << "/crs.json: not carried to the model, whose datum is "
                      << DatumTypeName(input_.datum.type)
                      << ", not the control's (it needs three control points)";
       }

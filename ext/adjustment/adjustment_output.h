@@ -36,6 +36,8 @@ struct AdjustmentRunInfo {
   std::string database_path;
   std::string input_path;
   std::string control_path;
+  // The control's crs.json (bayon import_control), or empty.
+  std::string georeference_json;
   std::string self_calibration;   // the mode, as given
   std::string blunder_detection;  // the method, as given
 };

@@ -209,7 +209,7 @@ Eigen::Vector3d CrsTransform::Transform(const Eigen::Vector3d& point,
   return result;
 }
 
-void WriteGeoFrame(const std::string& path, const GeoFrame& frame) {
+std::string GeoFrameJson(const GeoFrame& frame) {
   nlohmann::ordered_json json;
   json["source_crs"] = frame.source_crs;
   json["crs"] = frame.crs;
@@ -217,7 +217,11 @@ void WriteGeoFrame(const std::string& path, const GeoFrame& frame) {
   json["note"] =
       "model coordinates = crs coordinates - origin (metres); heights as the "
       "survey gave them";
-  WriteFileAtomically(path, json.dump(2) + "\n");
+  return json.dump(2) + "\n";
+}
+
+void WriteGeoFrame(const std::string& path, const GeoFrame& frame) {
+  WriteFileAtomically(path, GeoFrameJson(frame));
 }
 
 GeoFrame ReadGeoFrame(const std::string& path) {
@@ -237,17 +241,29 @@ GeoFrame ReadGeoFrame(const std::string& path) {
   return frame;
 }
 
+std::optional<GeoFrame> ReadModelGeoFrame(const std::string& folder) {
+  const std::string path = folder + "/crs.json";
+  if (!std::filesystem::exists(path)) return std::nullopt;
+  return ReadGeoFrame(path);
+}
+
+void PlaceGeoFrame(const std::optional<GeoFrame>& frame,
+                   const std::string& output_folder) {
+  const std::string path = output_folder + "/crs.json";
+  if (frame) {
+    WriteGeoFrame(path, *frame);
+  } else {
+    // An earlier model's frame is not this one's.
+    std::filesystem::remove(path);
+  }
+}
+
 bool CopyGeoFrame(const std::string& model_folder,
                   const std::string& output_folder) {
-  const std::string path = model_folder + "/crs.json";
-  if (!std::filesystem::exists(path)) {
-    // An earlier model's frame is not this one's.
-    std::filesystem::remove(output_folder + "/crs.json");
-    return false;
-  }
   // Read and written again: a malformed file is refused, not spread.
-  WriteGeoFrame(output_folder + "/crs.json", ReadGeoFrame(path));
-  return true;
+  const std::optional<GeoFrame> frame = ReadModelGeoFrame(model_folder);
+  PlaceGeoFrame(frame, output_folder);
+  return frame.has_value();
 }
 
 }  // namespace bayon

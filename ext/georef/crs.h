@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <string>
 
 struct pj_ctx;
@@ -67,14 +68,24 @@ class CrsTransform {
   std::string what_;
 };
 
-// crs.json: {"source_crs", "crs", "origin": [x, y, z]}.
+// crs.json: {"source_crs", "crs", "origin": [x, y, z]}; GeoFrameJson is
+// its text.
+std::string GeoFrameJson(const GeoFrame& frame);
 void WriteGeoFrame(const std::string& path, const GeoFrame& frame);
 GeoFrame ReadGeoFrame(const std::string& path);
 
 // A model folder's crs.json (adjust writes the control's beside the
-// model), copied into `output_folder`, so that a cloud or a textured model
-// made from the model says where it lies in the world. False where the
-// model has none (an earlier crs.json in `output_folder` is removed).
+// model); nullopt where it has none. Throws InputError for a malformed one.
+std::optional<GeoFrame> ReadModelGeoFrame(const std::string& folder);
+
+// The frame written into `output_folder` as crs.json, or where there is
+// none, an earlier crs.json there removed.
+void PlaceGeoFrame(const std::optional<GeoFrame>& frame,
+                   const std::string& output_folder);
+
+// ReadModelGeoFrame then PlaceGeoFrame: so that a cloud or a textured
+// model made from a model says where it lies in the world. False where the
+// model has none.
 bool CopyGeoFrame(const std::string& model_folder,
                   const std::string& output_folder);
 
