@@ -608,5 +608,84 @@ TEST(Orientation, HerzJesuWithNothingGiven) {
   EXPECT_LT(evaluation.rotation_rms_deg, 0.25);
 }
 
+// Issue 31 part 1: nothing given on temple-ring. The ring's pairs do not
+// fix the focal length in `relative` (its score rises by under 5 % from 1/1.5
+// to 1.5 times the best), so strip forms the model with COLMAP's guess, 768
+// px for the truth's 1523, and adjust estimates the focal length first,
+// alone, then the other parameters. Measured 2026-12-05 (about 25 s on 2
+// cores): 16/16, focal length 1536 px (+0.9 %), rotation RMS 0.224 deg,
+// centre RMS 0.32 % of the distance. The calibrated run: 0.134 deg, 0.21 %;
+// stock COLMAP, nothing given: 13/16 at 0.8-1.0 deg. The issue's 0.5 % and
+// 1.2 times the calibrated run are not reached: the bounds below hold what
+// is. Holding the guess is refused before any work.
+TEST(Orientation, TempleWithNothingGiven) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string images = testing::DataPath("temple-ring");
+  const std::string dir = testing::TempDir("orientation_temple_uncalibrated");
+  const std::string db = dir + "/database.db";
+  const Scene truth = ImportTempleTruth(dir);
+  const double true_focal_px =
+      truth.cameras.begin()->second.MeanFocalLengthPx();
+  bayon::Run({"import",
+              "--image_path",
+              images,
+              "--database_path",
+              db,
+              "--single_camera",
+              "1"});
+  bayon::Run({"features", "--database_path", db, "--image_path", images});
+  bayon::Run({"match",
+              "--database_path",
+              db,
+              "--image_path",
+              images,
+              "--pairing",
+              "exhaustive",
+              "--num_threads",
+              "2"});
+  bayon::Run({"relative", "--database_path", db, "--num_threads", "2"});
+  {
+    Database database(db, Database::Mode::kReadOnly);
+    ASSERT_FALSE(database.ReadCamera(1).has_prior_focal_length)
+        << "relative now fixes the temple's focal length: this test no "
+           "longer tests a guess";
+  }
+  BundleThroughBayonsChain(db, images, dir, "significant");
+  const Scene adjusted = ReadModel(dir + "/adjusted");
+  const double adjusted_px =
+      adjusted.cameras.begin()->second.MeanFocalLengthPx();
+  const SparseEvaluation evaluation = EvaluateSparse(adjusted, truth);
+  std::printf(
+      "temple-ring, nothing given: focal length %.1f px after adjust (guess "
+      "768, truth %.1f); %d/16 images, centre RMS %.3f %%, rotation RMS "
+      "%.3f deg\n",
+      adjusted_px,
+      true_focal_px,
+      evaluation.num_registered,
+      100 * evaluation.center_rms_relative,
+      evaluation.rotation_rms_deg);
+  EXPECT_NEAR(adjusted_px / true_focal_px, 1, 0.012);
+  EXPECT_EQ(evaluation.num_registered, 16);
+  EXPECT_LT(evaluation.center_rms_relative, 0.004);
+  EXPECT_LT(evaluation.rotation_rms_deg, 0.3);
+
+  const auto before = testing::HashTree(dir + "/initial");
+  const testing::CommandResult held = testing::RunBayon({"adjust",
+                                                         "--database_path",
+                                                         db,
+                                                         "--input_path",
+                                                         dir + "/initial",
+                                                         "--output_path",
+                                                         dir + "/held",
+                                                         "--self_calibration",
+                                                         "none"});
+  EXPECT_EQ(held.exit_code, 2) << held.output;
+  EXPECT_NE(held.LastLine().find("its focal length is unknown"),
+            std::string::npos)
+      << held.LastLine();
+  EXPECT_FALSE(fs::exists(dir + "/held"));
+  EXPECT_EQ(testing::HashTree(dir + "/initial"), before);
+}
+
 }  // namespace
 }  // namespace bayon

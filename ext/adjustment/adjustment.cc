@@ -33,12 +33,19 @@ int DeactivateObservationsBehindCameras(AdjustmentBlock* block) {
   return count;
 }
 
+// The focal length among a camera's parameters: Brown/Beyer's correction
+// dc, a COLMAP model's focal length(s).
+std::vector<int> FocalLengthParameters(const Camera& camera) {
+  if (camera.model_id == CameraModelId::kBrownBeyer) return {brown::kDc};
+  return camera.ModelInfo().focal_idxs;
+}
+
 std::vector<std::vector<int>> ResolveCandidates(
     const AdjustmentOptions& options, const AdjustmentBlock& block) {
   std::vector<std::vector<int>> candidates(block.cameras.size());
-  if (options.self_calibration == SelfCalibration::kNone) return candidates;
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     const CameraModelId model = block.cameras[c].camera.model_id;
+    if (options.self_calibration == SelfCalibration::kNone) continue;
     if (options.self_calibration != SelfCalibration::kList) {
       candidates[c] = CandidateParameters(model);
       continue;
@@ -69,6 +76,27 @@ std::vector<std::vector<int>> ResolveCandidates(
                         " instead");
       }
       candidates[c].push_back(idx);
+    }
+  }
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    const BlockCamera& camera = block.cameras[c];
+    if (!camera.focal_unknown) continue;
+    for (int idx : FocalLengthParameters(camera.camera)) {
+      if (std::find(candidates[c].begin(), candidates[c].end(), idx) ==
+          candidates[c].end()) {
+        ThrowInputError(
+            "camera ",
+            camera.camera.camera_id,
+            ": its focal length is unknown (COLMAP's guess of 1.2 x the long "
+            "side: no EXIF, no calibration, and bayon relative could not "
+            "estimate it from the photographs), and --self_calibration ",
+            options.self_calibration == SelfCalibration::kNone ? "none"
+                                                               : "without it",
+            " would hold the guess; estimate it (--self_calibration "
+            "significant, all, or a list with ",
+            ParameterNames(camera.camera.model_id)[idx],
+            ") or give the lens (bayon import --focal_length_mm)");
+      }
     }
   }
   return candidates;
@@ -108,6 +136,10 @@ class Adjuster {
     SetCameraParametersFree(false);
     if (options_.two_steps || !self_calibrate) {
       Solve("step 1: without self-calibration", robust);
+    }
+    if (self_calibrate && EstimateUnknownFocalLengthsFree()) {
+      Solve("step 1b: the unknown focal lengths", robust);
+      LogUnknownFocalLengths();
     }
     if (self_calibrate) {
       SetCameraParametersFree(true);
@@ -150,6 +182,43 @@ class Adjuster {
       if (!free) continue;
       for (int idx : candidates_[c]) camera.free[idx] = true;
     }
+  }
+
+  // Frees only the focal lengths that are unknown; false where there are
+  // none.
+  bool EstimateUnknownFocalLengthsFree() {
+    bool any = false;
+    for (BlockCamera& camera : block_->cameras) {
+      std::fill(camera.free.begin(), camera.free.end(), false);
+      if (!camera.focal_unknown) continue;
+      for (int idx : FocalLengthParameters(camera.camera)) {
+        camera.free[idx] = true;
+        any = true;
+      }
+    }
+    return any;
+  }
+
+  void LogUnknownFocalLengths() const {
+    for (size_t c = 0; c < block_->cameras.size(); ++c) {
+      const BlockCamera& camera = block_->cameras[c];
+      if (!camera.focal_unknown) continue;
+      Camera guess = camera.camera;
+      guess.params = initial_params_[c];
+      LOG(INFO) << "camera " << camera.camera.camera_id
+                << ": focal length unknown, estimated alone first: "
+                << guess.MeanFocalLengthPx() << " px (the guess) -> "
+                << camera.camera.MeanFocalLengthPx() << " px";
+    }
+  }
+
+  // The unknown focal lengths are never removed (step 1b above).
+  bool KeptUnknownFocalLength(const ParameterEstimate& estimate) const {
+    const BlockCamera& camera = block_->cameras[estimate.camera_idx];
+    if (!camera.focal_unknown) return false;
+    const std::vector<int> focal = FocalLengthParameters(camera.camera);
+    return std::find(focal.begin(), focal.end(), estimate.param_idx) !=
+           focal.end();
   }
 
   void Solve(const std::string& name, bool robust) {
@@ -390,6 +459,7 @@ class Adjuster {
       for (const ParameterEstimate& estimate : FreeEstimates(precision)) {
         std::string why;
         if (estimate.exterior_correlation > imitated.exterior_correlation &&
+            !KeptUnknownFocalLength(estimate) &&
             Undeterminable(estimate, &why)) {
           imitated = estimate;
           reason = why;
@@ -497,7 +567,8 @@ class Adjuster {
       weakest.t_value = std::numeric_limits<double>::infinity();
       for (const ParameterEstimate& estimate : FreeEstimates(precision)) {
         if (HigherRadialTermFree(block_->cameras[estimate.camera_idx],
-                                 estimate.param_idx)) {
+                                 estimate.param_idx) ||
+            KeptUnknownFocalLength(estimate)) {
           continue;
         }
         if (estimate.t_value < weakest.t_value) weakest = estimate;

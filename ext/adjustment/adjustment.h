@@ -6,6 +6,14 @@
 //
 //  1. a first adjustment without additional parameters, "to guarantee
 //     global convergence" (the camera as given);
+//  1b. where a camera's focal length is unknown (BlockCamera::focal_unknown:
+//     COLMAP's guess of 1.2 x the long side), that focal length alone
+//     freed and estimated, as COLMAP's incremental bundle refines it from
+//     the same guess; it is then kept through steps 2 and 4 whatever its
+//     correlations and t-value, since holding it would mean holding the
+//     guess. Freeing every parameter at once from a guess that is off by
+//     half lets the affinity and the distortion take the focal length's
+//     place (temple-ring: B1 drove fx to 3.2 times fy);
 //  2. the additional parameters (the ten of Brown 1971 / Beyer 1992 for
 //     BROWN_BEYER cameras) freed, the block adjusted again;
 //  3. blunder detection: data snooping (Baarda 1968) with redundancy

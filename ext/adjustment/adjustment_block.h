@@ -39,6 +39,10 @@ struct BlockCamera {
   std::vector<bool> free;
   // COLMAP model the camera came from (to convert back on output).
   CameraModelId source_model = CameraModelId::kInvalid;
+  // The focal length is COLMAP's guess (1.2 x the long side: no EXIF, no
+  // calibration, and the photographs did not fix it in bayon relative): the
+  // self-calibration estimates it first, alone, and keeps it (adjustment.h).
+  bool focal_unknown = false;
 };
 
 struct BlockImage {

@@ -191,6 +191,18 @@ std::map<ObservationKey, Eigen::Matrix2d> TakeTiePointsFromDatabase(
   return covariances;
 }
 
+// Whether a model's camera still has the focal length COLMAP guessed at
+// import (1.2 x the long side): the database's camera has no prior focal
+// length (no EXIF, none given, none estimated by bayon relative) and the
+// model's is the same, so no mapper has refined it either.
+bool FocalLengthIsTheGuess(const Camera& camera, Database* database) {
+  if (!database->ExistsCamera(camera.camera_id)) return false;
+  const Camera imported = database->ReadCamera(camera.camera_id);
+  const double focal = camera.MeanFocalLengthPx();
+  return !imported.has_prior_focal_length &&
+         std::abs(imported.MeanFocalLengthPx() - focal) <= 1e-9 * focal;
+}
+
 }  // namespace
 
 std::vector<TiePointRecord> ReadTiePointsFor(Database* database,
@@ -326,6 +338,7 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
 
   // The cameras the block adjusts.
   Scene block_scene = scene;
+  std::set<camera_t> unknown_focal;
   for (auto& [camera_id, camera] : block_scene.cameras) {
     CameraSource source;
     source.camera_id = camera_id;
@@ -344,6 +357,16 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
       camera.camera_id = camera_id;
       source.source = "the database (bayon_calibration)";
     } else {
+      if (FocalLengthIsTheGuess(camera, &database)) {
+        unknown_focal.insert(camera_id);
+        input.notes.push_back(
+            StrCat("camera ",
+                   camera_id,
+                   ": the focal length is COLMAP's guess (",
+                   camera.MeanFocalLengthPx(),
+                   " px); the self-calibration estimates it first"));
+        LOG(WARNING) << input.notes.back();
+      }
       const CameraConversion conversion =
           ConvertCamera(camera, CameraModelId::kBrownBeyer);
       source.source = StrCat(source.input_model,
@@ -404,8 +427,9 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
     LOG(INFO) << input.notes.back();
   }
   for (size_t c = 0; c < input.block.cameras.size(); ++c) {
-    input.block.cameras[c].source_model =
-        scene.cameras.at(input.block.cameras[c].camera.camera_id).model_id;
+    const camera_t camera_id = input.block.cameras[c].camera.camera_id;
+    input.block.cameras[c].source_model = scene.cameras.at(camera_id).model_id;
+    input.block.cameras[c].focal_unknown = unknown_focal.count(camera_id) > 0;
   }
   if (input.block.points.empty()) {
     ThrowInputError(input_path, ": no 3D point is seen in two or more images");

@@ -127,15 +127,16 @@ class StripBuilder {
           camera = record->second.camera;
           camera.camera_id = row.camera_id;
         } else if (!colmap_camera.has_prior_focal_length) {
-          ThrowInputError(database_path_,
-                          ": camera ",
-                          row.camera_id,
-                          " has no calibration (its focal length is COLMAP's "
-                          "default guess, there is no bayon_calibration, and "
-                          "bayon relative could not estimate it from the "
-                          "photographs: its log says why); give the lens "
-                          "with bayon import --focal_length_mm or calibrate "
-                          "the camera first");
+          // The strip is formed with the guess; it is off in scale and
+          // shape as the guess is, which the bundle, estimating the focal
+          // length first (adjustment.h, step 1b), takes out.
+          LOG(WARNING) << "camera " << row.camera_id
+                       << ": the focal length is COLMAP's guess ("
+                       << camera.MeanFocalLengthPx()
+                       << " px; no EXIF, no calibration, and bayon relative "
+                          "could not estimate it: its log says why); the "
+                          "strip is formed with it, and bayon adjust "
+                          "estimates it";
         }
         CheckCameraCalibration(camera, database_path_);
         camera_idxs[row.camera_id] = static_cast<int>(colmap_cameras_.size());

@@ -331,7 +331,7 @@ TEST(Strip, BadInput) {
               std::string::npos)
         << error.what();
   }
-  // A camera without calibration: COLMAP's default focal length and no
+  // A camera without a focal length: none in the database and no
   // bayon_calibration.
   const std::string db = testing::TempDir("strip_bad_camera") + "/db.db";
   fs::copy_file(ws.path + "/database.db", db);
@@ -340,6 +340,7 @@ TEST(Strip, BadInput) {
     database.connection()->Execute("DROP TABLE bayon_calibration");
     Camera camera = database.ReadCamera(1);
     camera.has_prior_focal_length = false;
+    for (int idx : camera.ModelInfo().focal_idxs) camera.params[idx] = 0;
     database.UpdateCamera(camera);
   }
   try {
@@ -350,6 +351,33 @@ TEST(Strip, BadInput) {
               std::string::npos)
         << error.what();
   }
+}
+
+// COLMAP's guess of the focal length (no EXIF, no bayon_calibration, not
+// estimated by relative): the strip is formed with it, for adjust to
+// estimate the focal length (adjustment.h, step 1b).
+TEST(Strip, FormsTheStripWithTheGuessedFocalLength) {
+  const Workspace ws = MakeWorkspace("strip_guess", 2);
+  const std::string db = testing::TempDir("strip_guess_camera") + "/db.db";
+  fs::copy_file(ws.path + "/database.db", db);
+  Camera guess;
+  {
+    Database database(db, Database::Mode::kReadWrite);
+    database.connection()->Execute("DROP TABLE bayon_calibration");
+    guess = database.ReadCamera(1);
+    guess.has_prior_focal_length = false;
+    for (int idx : guess.ModelInfo().focal_idxs) {
+      guess.params[idx] = 1.2 * std::max(guess.width, guess.height);
+    }
+    database.UpdateCamera(guess);
+  }
+  StripOptions options;
+  options.num_threads = 1;
+  const StripResult result = RunStrip(db, "", options);
+  EXPECT_EQ(result.model.images.size(), ws.truth.scene.images.size());
+  ASSERT_EQ(result.model.cameras.size(), 1u);
+  EXPECT_DOUBLE_EQ(result.model.cameras.begin()->second.MeanFocalLengthPx(),
+                   guess.MeanFocalLengthPx());
 }
 
 }  // namespace
