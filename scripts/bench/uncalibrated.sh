@@ -6,9 +6,11 @@
 #    self-calibration, the demo's way); COLMAP gets it as
 #    --ImageReader.camera_params and holds it (--Mapper.ba_refine_* 0);
 #  - nothing: no calibration, no EXIF. bayon's import guesses 1.2 x the long
-#    side, `relative` estimates the focal length from the photographs and
-#    adjust self-calibrates (significant); COLMAP starts from the same guess
-#    (SIMPLE_RADIAL, its default) and refines it in its mapper;
+#    side, `relative` estimates the focal length from the photographs where
+#    the pairs fix it (else strip keeps the guess and adjust estimates it
+#    first), and adjust self-calibrates (significant); COLMAP starts from
+#    the same guess (SIMPLE_RADIAL, its default) and refines it in its
+#    mapper;
 #  - focal5: a focal length 5 % too long, as EXIF gives a lens (principal
 #    point at the image centre). bayon: import --focal_length_mm
 #    --pixel_size_um, adjust self-calibrates; COLMAP: that focal length as
@@ -127,11 +129,12 @@ for set_name in ("temple", "fountain", "herz-jesu"):
                 1000 * e["center_rms"], 100 * e["center_rms_relative"],
                 e["rotation_rms_deg"]))
 print("\ncalibrated: both hold the truth's camera; nothing: both start from"
-      "\n1.2 x the long side (bayon estimates it in `relative`, then"
-      "\nself-calibrates; COLMAP refines it in its mapper); focal5: both start"
+      "\n1.2 x the long side (bayon estimates it in `relative` where the pairs"
+      "\nfix it, else first in adjust, then self-calibrates; COLMAP refines it"
+      "\nin its mapper); focal5: both start"
       "\nfrom 1.05 x the true focal length and refine it. f: the model's mean"
       "\nfocal length (temple: the truth's fx, fy differ by 0.4 %). centre %:"
       "\nRMS centre error / mean camera-to-centroid distance after the"
-      "\n7-parameter similarity. failed: no model (bayon's strip stops"
-      "\nwithout a focal length; see " + root + "/SET/MODE/bayon/strip.log).")
+      "\n7-parameter similarity. failed: no model (see the logs in "
+      "\n" + root + "/SET/MODE/bayon).")
 EOF
