@@ -6,7 +6,11 @@
 // to the report in one command, the orientation against the truth,
 // a second run that finds everything up to date, a run killed with SIGKILL in
 // the middle of `dense` that resumes without redoing the finished stages and
-// gives the same result, and bad input stopped before any work.
+// gives the same result, bad input stopped before any work, and a second
+// run on one workspace stopped while the first holds it.
+#include "ext/core/errors.h"
+#include "ext/core/file_util.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -16,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 #include "tests/temple_fixture.h"
 #include "tests/testing.h"
@@ -249,6 +254,36 @@ TEST(Pipeline, PhotographsThatDoNotOverlapAreNamed) {
   EXPECT_NE(run.LastLine().find("overlap"), std::string::npos)
       << run.LastLine();
   EXPECT_FALSE(fs::exists(dir + "/ws/sparse"));
+}
+
+// One run per workspace: while another process holds the workspace's lock
+// (a second `bayon pipeline` started beside the first), the run stops with
+// one line before any stage; once the lock is released, it runs.
+TEST(Pipeline, ASecondRunOnOneWorkspaceStopsWithOneLine) {
+  BAYON_REQUIRE_DATA("temple-ring");
+  const std::string dir = testing::TempDir("pipeline_locked");
+  const std::string ws = dir + "/ws";
+  fs::create_directories(ws + "/pipeline");
+  const std::vector<std::string> args = {"pipeline",
+                                         "--workspace_path",
+                                         ws,
+                                         "--image_path",
+                                         testing::DataPath("temple-ring"),
+                                         "--to_stage",
+                                         "import"};
+  {
+    const FileLock first(ws + "/pipeline/lock", "the first run");
+    const testing::CommandResult second = RunBayon(args);
+    EXPECT_EQ(second.exit_code, 2) << second.output;
+    EXPECT_NE(second.LastLine().find(StrCat(
+                  "is in use by another process (pid ", ::getpid(), ")")),
+              std::string::npos)
+        << second.LastLine();
+    EXPECT_FALSE(fs::exists(ws + "/database.db"));
+  }
+  const testing::CommandResult after = RunBayon(args);
+  EXPECT_EQ(after.exit_code, 0) << after.output;
+  EXPECT_TRUE(fs::exists(ws + "/database.db"));
 }
 
 }  // namespace

@@ -830,6 +830,10 @@ int RunPipeline(int argc, char** argv) {
     google::SetLogDestination(severity, "");
   }
   fs::create_directories(In(c.workspace, "pipeline"));
+  // One run per workspace: a second would run the same stages into the
+  // same files.
+  const FileLock lock(In(c.workspace, "pipeline/lock"),
+                      StrCat("workspace ", c.workspace));
   command.StartLog(WorkspaceLogPath(c.workspace, "pipeline"));
   LOG(INFO) << "config: "
             << (config.description.empty() ? "(built-in defaults)"

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <sys/file.h>
 #include <sys/types.h>
 #include <unistd.h>
 
@@ -244,6 +245,39 @@ std::vector<std::string> ListFilesRecursive(const std::string& folder) {
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+FileLock::FileLock(const std::string& path, const std::string& what) {
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) {
+    ThrowInputError(
+        path, ": cannot open the lock file (", std::strerror(errno), ")");
+  }
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    char holder[32] = {};
+    const ssize_t n = ::pread(fd_, holder, sizeof(holder) - 1, 0);
+    ::close(fd_);
+    fd_ = -1;
+    if (error == EWOULDBLOCK) {
+      std::string pid(holder, n > 0 ? static_cast<size_t>(n) : 0);
+      pid.erase(pid.find_last_not_of(" \n") + 1);
+      ThrowInputError(what,
+                      " is in use by another process",
+                      pid.empty() ? std::string() : StrCat(" (pid ", pid, ")"),
+                      "; wait for it to finish or stop it, then run again");
+    }
+    ThrowInputError(path, ": cannot lock (", std::strerror(error), ")");
+  }
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(fd_, 0) == 0) {
+    [[maybe_unused]] const ssize_t written =
+        ::pwrite(fd_, pid.data(), pid.size(), 0);
+  }
+}
+
+FileLock::~FileLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the flock
 }
 
 }  // namespace bayon

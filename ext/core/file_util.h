@@ -90,4 +90,22 @@ std::string TempSuffix();
 // it, so a rerun after kill -9 leaves no stray temporaries.
 void RemoveStaleTemporaries(const std::string& path);
 
+// An exclusive hold on a lock file for as long as the object lives (flock):
+// two processes that would write the same workspace do not run at once.
+// The kernel releases the hold when the process ends, however it ends, so
+// a killed run leaves no stale lock. The file keeps the holder's pid for
+// the message of the next one.
+class FileLock {
+ public:
+  // Throws InputError naming `what` and the holder's pid when another
+  // process holds `path`, or when the file cannot be opened.
+  FileLock(const std::string& path, const std::string& what);
+  ~FileLock();
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 }  // namespace bayon
