@@ -323,6 +323,35 @@ void BundleThroughBayonsChain(const std::string& db,
        "2"});
 }
 
+// Photographs imported with nothing known of the camera (no EXIF, none
+// given: import guesses 1.2 x the long side), features, every pair matched
+// and oriented (relative estimates the focal length where the pairs fix it).
+void OrientPairsWithNothingGiven(const std::string& images,
+                                 const std::string& db) {
+  Run({"import",
+       "--image_path",
+       images,
+       "--database_path",
+       db,
+       "--single_camera",
+       "1"});
+  {
+    Database database(db, Database::Mode::kReadOnly);
+    ASSERT_FALSE(database.ReadCamera(1).has_prior_focal_length);
+  }
+  Run({"features", "--database_path", db, "--image_path", images});
+  Run({"match",
+       "--database_path",
+       db,
+       "--image_path",
+       images,
+       "--pairing",
+       "exhaustive",
+       "--num_threads",
+       "2"});
+  Run({"relative", "--database_path", db, "--num_threads", "2"});
+}
+
 // How far the adjusted model's z is from the truth's vertical `truth_up`
 // (in the truth's frame), in degrees: per image, the angle between the two
 // as that camera sees them (the frames' similarity cancels), the mean.
@@ -557,28 +586,7 @@ TEST(Orientation, HerzJesuWithNothingGiven) {
   const Scene truth = ImportStrechaTruth("herz-jesu-P8", dir);
   const double true_focal_px =
       truth.cameras.begin()->second.MeanFocalLengthPx();
-  bayon::Run({"import",
-              "--image_path",
-              images,
-              "--database_path",
-              db,
-              "--single_camera",
-              "1"});
-  {
-    Database database(db, Database::Mode::kReadOnly);
-    ASSERT_FALSE(database.ReadCamera(1).has_prior_focal_length);
-  }
-  bayon::Run({"features", "--database_path", db, "--image_path", images});
-  bayon::Run({"match",
-              "--database_path",
-              db,
-              "--image_path",
-              images,
-              "--pairing",
-              "exhaustive",
-              "--num_threads",
-              "2"});
-  bayon::Run({"relative", "--database_path", db, "--num_threads", "2"});
+  OrientPairsWithNothingGiven(images, db);
   double estimated_px = 0;
   {
     Database database(db, Database::Mode::kReadOnly);
@@ -626,24 +634,7 @@ TEST(Orientation, TempleWithNothingGiven) {
   const Scene truth = ImportTempleTruth(dir);
   const double true_focal_px =
       truth.cameras.begin()->second.MeanFocalLengthPx();
-  bayon::Run({"import",
-              "--image_path",
-              images,
-              "--database_path",
-              db,
-              "--single_camera",
-              "1"});
-  bayon::Run({"features", "--database_path", db, "--image_path", images});
-  bayon::Run({"match",
-              "--database_path",
-              db,
-              "--image_path",
-              images,
-              "--pairing",
-              "exhaustive",
-              "--num_threads",
-              "2"});
-  bayon::Run({"relative", "--database_path", db, "--num_threads", "2"});
+  OrientPairsWithNothingGiven(images, db);
   {
     Database database(db, Database::Mode::kReadOnly);
     ASSERT_FALSE(database.ReadCamera(1).has_prior_focal_length)
