@@ -86,5 +86,30 @@ TEST(FileUtil, KilledWritersTemporariesAreRemovedByTheNextWrite) {
   EXPECT_FALSE(fs::exists(dir + "/model.old.tmp-" + dead + "-2"));
 }
 
+// flock is held per open file, so a second FileLock in the same process is
+// refused as another process's would be; the pid in the message is the
+// holder's, and the lock is free again once the holder is gone.
+TEST(FileUtil, FileLockRefusesASecondHolderUntilTheFirstIsGone) {
+  const std::string path = testing::TempDir("file_lock") + "/lock";
+  {
+    const FileLock first(path, "the workspace");
+    try {
+      const FileLock second(path, "the workspace");
+      FAIL() << "expected an InputError";
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what())
+                    .find(StrCat("the workspace is in use by another process "
+                                 "(pid ",
+                                 ::getpid(),
+                                 ")")),
+                std::string::npos)
+          << error.what();
+    }
+  }
+  EXPECT_NO_THROW(FileLock(path, "the workspace"));
+  // A lock file that cannot be made: one line naming it.
+  EXPECT_THROW(FileLock(path + "/not_a_folder/lock", "x"), InputError);
+}
+
 }  // namespace
 }  // namespace bayon
