@@ -137,7 +137,7 @@ class Adjuster {
     if (options_.two_steps || !self_calibrate) {
       Solve("step 1: without self-calibration", robust);
     }
-    if (self_calibrate && EstimateUnknownFocalLengthsFree()) {
+    if (self_calibrate && FreeUnknownFocalLengths()) {
       Solve("step 1b: the unknown focal lengths", robust);
       LogUnknownFocalLengths();
     }
@@ -186,7 +186,7 @@ class Adjuster {
 
   // Frees only the focal lengths that are unknown; false where there are
   // none.
-  bool EstimateUnknownFocalLengthsFree() {
+  bool FreeUnknownFocalLengths() {
     bool any = false;
     for (BlockCamera& camera : block_->cameras) {
       std::fill(camera.free.begin(), camera.free.end(), false);
