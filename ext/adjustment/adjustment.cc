@@ -187,9 +187,9 @@ class Adjuster {
   // Frees only the focal lengths that are unknown; false where there are
   // none.
   bool FreeUnknownFocalLengths() {
+    SetCameraParametersFree(false);
     bool any = false;
     for (BlockCamera& camera : block_->cameras) {
-      std::fill(camera.free.begin(), camera.free.end(), false);
       if (!camera.focal_unknown) continue;
       for (int idx : FocalLengthParameters(camera.camera)) {
         camera.free[idx] = true;
