@@ -343,6 +343,9 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
     CameraSource source;
     source.camera_id = camera_id;
     source.input_model = camera.ModelName();
+    // The input model's camera, not a calibration: its focal length may
+    // still be the guess.
+    bool from_model = true;
     if (options.camera_model == CameraModelChoice::kColmap) {
       source.source = "the input model";
     } else if (auto it = beside.find(camera_id);
@@ -350,23 +353,15 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
                it->second.model_id == CameraModelId::kBrownBeyer) {
       camera = it->second;
       source.source = input_path + "/calibration.json";
+      from_model = false;
     } else if (auto record = calibrations.find(camera_id);
                record != calibrations.end() &&
                record->second.camera.model_id == CameraModelId::kBrownBeyer) {
       camera = record->second.camera;
       camera.camera_id = camera_id;
       source.source = "the database (bayon_calibration)";
+      from_model = false;
     } else {
-      if (FocalLengthIsTheGuess(camera, &database)) {
-        unknown_focal.insert(camera_id);
-        input.notes.push_back(
-            StrCat("camera ",
-                   camera_id,
-                   ": the focal length is COLMAP's guess (",
-                   camera.MeanFocalLengthPx(),
-                   " px); the self-calibration estimates it first"));
-        LOG(WARNING) << input.notes.back();
-      }
       const CameraConversion conversion =
           ConvertCamera(camera, CameraModelId::kBrownBeyer);
       source.source = StrCat(source.input_model,
@@ -390,6 +385,17 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
     }
     CheckCameraCalibration(camera, source.source);
     input.cameras.push_back(source);
+    const Camera& model_camera = scene.cameras.at(camera_id);
+    if (from_model && FocalLengthIsTheGuess(model_camera, &database)) {
+      unknown_focal.insert(camera_id);
+      input.notes.push_back(
+          StrCat("camera ",
+                 camera_id,
+                 ": the focal length is COLMAP's guess (",
+                 model_camera.MeanFocalLengthPx(),
+                 " px); the self-calibration estimates it first"));
+      LOG(WARNING) << input.notes.back();
+    }
   }
   // Interior orientations of scanned film frames. Digital images use the
   // default frame of the camera just chosen, not their bayon_interior row,
