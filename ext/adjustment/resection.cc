@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/adjustment/resection.h"
 
+#include "ext/core/robust_estimator.h"
+
 #include <Eigen/Dense>
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -41,17 +43,6 @@ double Error(const Rigid3d& cam_from_world,
   const Eigen::Vector3d p = cam_from_world * X;
   if (p.z() <= 0) return std::numeric_limits<double>::infinity();
   return (p.head<2>() / p.z() - xy).norm();
-}
-
-int CountInliers(const std::vector<Eigen::Vector2d>& xy,
-                 const std::vector<Eigen::Vector3d>& X,
-                 const Rigid3d& pose,
-                 double max_error) {
-  int count = 0;
-  for (size_t i = 0; i < xy.size(); ++i) {
-    count += Error(pose, xy[i], X[i]) <= max_error;
-  }
-  return count;
 }
 
 // The DLT of the points `idx` (6 or more), the 3D points centred and scaled
@@ -128,6 +119,56 @@ Rigid3d Refine(const std::vector<Eigen::Vector2d>& xy,
                  Eigen::Vector3d(t[0], t[1], t[2]));
 }
 
+// The DLT's pose of six points, and every point's reprojection error
+// (infinite behind the camera).
+class DltEstimator {
+ public:
+  using Model = Rigid3d;
+  static constexpr int kMinNumSamples = 6;
+
+  DltEstimator(const std::vector<Eigen::Vector2d>& xy,
+               const std::vector<Eigen::Vector3d>& X)
+      : xy_(xy), X_(X) {}
+
+  bool Estimate(const std::vector<int>& sample, Rigid3d* pose) const {
+    const std::optional<Rigid3d> estimate = Dlt(xy_, X_, sample);
+    if (estimate) *pose = *estimate;
+    return estimate.has_value();
+  }
+
+  void Residuals(const Rigid3d& pose, std::vector<double>* errors) const {
+    errors->resize(xy_.size());
+    for (size_t i = 0; i < xy_.size(); ++i) {
+      (*errors)[i] = Error(pose, xy_[i], X_[i]);
+    }
+  }
+
+ private:
+  const std::vector<Eigen::Vector2d>& xy_;
+  const std::vector<Eigen::Vector3d>& X_;
+};
+
+// Samples without repetition: the first `size` of a permutation by a partial
+// Fisher-Yates shuffle, the permutation kept from one sample to the next.
+class ShuffleSampler {
+ public:
+  ShuffleSampler(int num_data, uint64_t seed) : rng_(seed), order_(num_data) {
+    std::iota(order_.begin(), order_.end(), 0);
+  }
+
+  void Sample(int size, std::vector<int>* sample) {
+    const int n = static_cast<int>(order_.size());
+    for (int k = 0; k < size; ++k) {
+      std::swap(order_[k], order_[k + rng_() % (n - k)]);
+    }
+    sample->assign(order_.begin(), order_.begin() + size);
+  }
+
+ private:
+  std::mt19937_64 rng_;
+  std::vector<int> order_;
+};
+
 }  // namespace
 
 std::optional<Resection> ResectImage(
@@ -139,25 +180,12 @@ std::optional<Resection> ResectImage(
   if (n < std::max(options.min_inliers, 6)) return std::nullopt;
   std::vector<Rigid3d> candidates;
   if (guess != nullptr) candidates.push_back(*guess);
-  std::mt19937_64 rng(options.seed);
-  std::vector<int> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  int best_count = -1;
-  Rigid3d best_dlt;
-  for (int s = 0; s < options.num_samples; ++s) {
-    for (int k = 0; k < 6; ++k) {
-      std::swap(order[k], order[k + rng() % (n - k)]);
-    }
-    const std::optional<Rigid3d> pose = Dlt(
-        image_xy, points, std::vector<int>(order.begin(), order.begin() + 6));
-    if (!pose) continue;
-    const int count = CountInliers(image_xy, points, *pose, options.max_error);
-    if (count > best_count) {
-      best_count = count;
-      best_dlt = *pose;
-    }
-  }
-  if (best_count >= 6) candidates.push_back(best_dlt);
+  ShuffleSampler sampler(n, options.seed);
+  const RansacReport<Rigid3d> dlt = Ransac(DltEstimator(image_xy, points),
+                                           options.num_samples,
+                                           options.max_error,
+                                           &sampler);
+  if (dlt.success && dlt.inliers.size() >= 6) candidates.push_back(dlt.model);
 
   std::optional<Resection> best;
   for (const Rigid3d& start : candidates) {

@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/core/alignment.h"
 
+#include "ext/core/robust_estimator.h"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <random>
 
 namespace bayon {
 
@@ -60,42 +61,69 @@ std::optional<Sim3d> EstimateSim3d(const std::vector<Eigen::Vector3d>& src,
   return result;
 }
 
+namespace {
+
+// The similarity of three point pairs, and every pair's distance under it.
+class Sim3dEstimator {
+ public:
+  using Model = Sim3d;
+  static constexpr int kMinNumSamples = 3;
+
+  Sim3dEstimator(const std::vector<Eigen::Vector3d>& src,
+                 const std::vector<Eigen::Vector3d>& dst)
+      : src_(src), dst_(dst) {}
+
+  bool Estimate(const std::vector<int>& sample, Sim3d* model) const {
+    const std::optional<Sim3d> estimate =
+        EstimateSim3d({src_[sample[0]], src_[sample[1]], src_[sample[2]]},
+                      {dst_[sample[0]], dst_[sample[1]], dst_[sample[2]]});
+    if (estimate) *model = *estimate;
+    return estimate.has_value();
+  }
+
+  void Residuals(const Sim3d& model, std::vector<double>* residuals) const {
+    residuals->resize(src_.size());
+    for (size_t i = 0; i < src_.size(); ++i) {
+      (*residuals)[i] = (dst_[i] - model * src_[i]).norm();
+    }
+  }
+
+ private:
+  const std::vector<Eigen::Vector3d>& src_;
+  const std::vector<Eigen::Vector3d>& dst_;
+};
+
+}  // namespace
+
 RobustSim3dReport EstimateSim3dRobust(const std::vector<Eigen::Vector3d>& src,
                                       const std::vector<Eigen::Vector3d>& dst,
                                       const RobustSim3dOptions& options) {
   RobustSim3dReport report;
   const size_t n = src.size();
   if (n < 3 || dst.size() != n) return report;
+  const Sim3dEstimator estimator(src, dst);
   auto residuals_of = [&](const Sim3d& t) {
-    std::vector<double> r(n);
-    for (size_t i = 0; i < n; ++i) r[i] = (dst[i] - t * src[i]).norm();
+    std::vector<double> r;
+    estimator.Residuals(t, &r);
     return r;
-  };
-  auto median_sq = [](std::vector<double> r) {
-    for (double& v : r) v *= v;
-    std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
-    return r[r.size() / 2];
   };
 
   std::optional<Sim3d> best;
   double best_median = std::numeric_limits<double>::infinity();
   if (n <= 4) {
+    // Too few points for a sample to leave any out.
     best = EstimateSim3d(src, dst);
-    if (best) best_median = median_sq(residuals_of(*best));
+    if (best) {
+      std::vector<double> r = residuals_of(*best);
+      best_median = MedianOfSquares(&r);
+    }
   } else {
-    std::mt19937 rng(options.random_seed);
-    std::uniform_int_distribution<size_t> pick(0, n - 1);
-    for (int trial = 0; trial < options.num_samples; ++trial) {
-      size_t a = pick(rng), b = pick(rng), c = pick(rng);
-      if (a == b || b == c || a == c) continue;
-      auto model =
-          EstimateSim3d({src[a], src[b], src[c]}, {dst[a], dst[b], dst[c]});
-      if (!model) continue;
-      const double m = median_sq(residuals_of(*model));
-      if (m < best_median) {
-        best_median = m;
-        best = model;
-      }
+    UniformSampler sampler(static_cast<int>(n), options.random_seed);
+    const LmedsReport<Sim3d> lmeds =
+        LeastMedianOfSquares(estimator, options.num_samples, &sampler);
+    if (lmeds.success()) {
+      best = lmeds.best().model;
+      best_median = lmeds.best().median_of_squares;
     }
   }
   if (!best) return report;

@@ -2,14 +2,15 @@
 #include "ext/matching/correlation_matcher.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/robust_estimator.h"
 
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <random>
 #include <unordered_map>
+#include <utility>
 
 namespace bayon {
 
@@ -112,6 +113,37 @@ struct Vote {
   Complex z1, z2;
 };
 
+// The similarity z2 = a z1 + b of two votes (the model is (a, b)), and
+// every vote's distance from it in image 2.
+class SimilarityEstimator {
+ public:
+  using Model = std::pair<Complex, Complex>;
+  static constexpr int kMinNumSamples = 2;
+
+  explicit SimilarityEstimator(const std::vector<Vote>& votes)
+      : votes_(votes) {}
+
+  bool Estimate(const std::vector<int>& sample, Model* model) const {
+    const Vote& v = votes_[sample[0]];
+    const Complex dz1 = v.z1 - votes_[sample[1]].z1;
+    if (std::abs(dz1) < 1e-6) return false;
+    const Complex a = (v.z2 - votes_[sample[1]].z2) / dz1;
+    *model = {a, v.z2 - a * v.z1};
+    return true;
+  }
+
+  void Residuals(const Model& model, std::vector<double>* residuals) const {
+    residuals->resize(votes_.size());
+    for (size_t k = 0; k < votes_.size(); ++k) {
+      (*residuals)[k] =
+          std::abs(model.first * votes_[k].z1 + model.second - votes_[k].z2);
+    }
+  }
+
+ private:
+  const std::vector<Vote>& votes_;
+};
+
 // RANSAC for z2 = a z1 + b on two-point samples; returns the inliers of
 // the best model.
 std::vector<int> BestSimilarity(const std::vector<Vote>& votes,
@@ -120,31 +152,14 @@ std::vector<int> BestSimilarity(const std::vector<Vote>& votes,
                                 unsigned int seed,
                                 Complex* a_best,
                                 Complex* b_best) {
-  std::vector<int> best;
-  if (votes.size() < 2) return best;
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> pick(0,
-                                          static_cast<int>(votes.size()) - 1);
-  std::vector<int> inliers;
-  for (int trial = 0; trial < num_trials; ++trial) {
-    const int i = pick(rng), j = pick(rng);
-    const Complex dz1 = votes[i].z1 - votes[j].z1;
-    if (i == j || std::abs(dz1) < 1e-6) continue;
-    const Complex a = (votes[i].z2 - votes[j].z2) / dz1;
-    const Complex b = votes[i].z2 - a * votes[i].z1;
-    inliers.clear();
-    for (int k = 0; k < static_cast<int>(votes.size()); ++k) {
-      if (std::abs(a * votes[k].z1 + b - votes[k].z2) < threshold) {
-        inliers.push_back(k);
-      }
-    }
-    if (inliers.size() > best.size()) {
-      best = inliers;
-      *a_best = a;
-      *b_best = b;
-    }
-  }
-  return best;
+  if (votes.size() < 2) return {};
+  UniformSampler sampler(static_cast<int>(votes.size()), seed);
+  const RansacReport<SimilarityEstimator::Model> report =
+      Ransac(SimilarityEstimator(votes), num_trials, threshold, &sampler);
+  if (!report.success) return {};
+  *a_best = report.model.first;
+  *b_best = report.model.second;
+  return report.inliers;
 }
 
 // Image 2 turned by r quarter turns about its centre, image centre on image

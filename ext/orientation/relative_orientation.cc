@@ -2,6 +2,7 @@
 #include "ext/orientation/relative_orientation.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/robust_estimator.h"
 #include "ext/core/statistics.h"
 
 #include <Eigen/Dense>
@@ -402,37 +403,48 @@ std::vector<std::vector<int>> Buckets(const ConjugatePoints& points, int grid) {
   return buckets;
 }
 
-// Eight points from eight different buckets (a bucket chosen with a
-// probability proportional to its number of points), as Zhang et al.
-// (1995) draw their LMedS samples: spread samples give well-conditioned
-// 8-point solutions, which matters most for narrow-angle images. With fewer
-// than eight buckets, points are drawn uniformly.
-void DrawSpreadSample(const std::vector<std::vector<int>>& buckets,
-                      std::mt19937* rng,
-                      std::vector<int>* sample) {
-  sample->clear();
-  size_t total = 0;
-  for (const auto& bucket : buckets) total += bucket.size();
-  std::uniform_int_distribution<size_t> pick(0, total - 1);
-  const bool spread = buckets.size() >= 8;
-  std::vector<size_t> used_buckets;
-  while (sample->size() < 8) {
-    // The bucket that contains the k-th point.
-    size_t k = pick(*rng), b = 0;
-    while (k >= buckets[b].size()) {
-      k -= buckets[b].size();
-      ++b;
-    }
-    if (spread && std::find(used_buckets.begin(), used_buckets.end(), b) !=
-                      used_buckets.end()) {
-      continue;
-    }
-    const int i = buckets[b][k];
-    if (std::find(sample->begin(), sample->end(), i) != sample->end()) continue;
-    used_buckets.push_back(b);
-    sample->push_back(i);
+// Samples from different buckets (a bucket chosen with a probability
+// proportional to its number of points), as Zhang et al. (1995) draw their
+// LMedS samples: spread samples give well-conditioned 8-point solutions,
+// which matters most for narrow-angle images. With fewer buckets than
+// points in a sample, points are drawn uniformly.
+class SpreadSampler {
+ public:
+  SpreadSampler(std::vector<std::vector<int>> buckets, unsigned int seed)
+      : buckets_(std::move(buckets)), rng_(seed) {
+    for (const auto& bucket : buckets_) num_points_ += bucket.size();
   }
-}
+
+  void Sample(int size, std::vector<int>* sample) {
+    sample->clear();
+    std::uniform_int_distribution<size_t> pick(0, num_points_ - 1);
+    const bool spread = buckets_.size() >= static_cast<size_t>(size);
+    std::vector<size_t> used_buckets;
+    while (static_cast<int>(sample->size()) < size) {
+      // The bucket that contains the k-th point.
+      size_t k = pick(rng_), b = 0;
+      while (k >= buckets_[b].size()) {
+        k -= buckets_[b].size();
+        ++b;
+      }
+      if (spread && std::find(used_buckets.begin(), used_buckets.end(), b) !=
+                        used_buckets.end()) {
+        continue;
+      }
+      const int i = buckets_[b][k];
+      if (std::find(sample->begin(), sample->end(), i) != sample->end()) {
+        continue;
+      }
+      used_buckets.push_back(b);
+      sample->push_back(i);
+    }
+  }
+
+ private:
+  std::vector<std::vector<int>> buckets_;
+  size_t num_points_ = 0;
+  std::mt19937 rng_;
+};
 
 // r_i / s_i: the residuals of points of different precision on one scale,
 // that of the typical point (pixels).
@@ -447,17 +459,41 @@ std::vector<double> StandardizedResiduals(const Eigen::Matrix3d& M,
 }
 
 // The median of the squared residuals of M over all points (eq. 2).
-double MedianOfSquares(const Eigen::Matrix3d& M,
-                       const ConjugatePoints& points,
-                       DrtResidual type,
-                       std::vector<double>* squared) {
-  const std::vector<double> residuals = StandardizedResiduals(M, points, type);
-  squared->resize(residuals.size());
-  for (size_t i = 0; i < residuals.size(); ++i) {
-    (*squared)[i] = residuals[i] * residuals[i];
-  }
-  return Median(*squared);
+double DrtMedianOfSquares(const Eigen::Matrix3d& M,
+                          const ConjugatePoints& points,
+                          DrtResidual type) {
+  std::vector<double> residuals = StandardizedResiduals(M, points, type);
+  return MedianOfSquares(&residuals);
 }
+
+// The DRT's M of eight points (eq. 1, linear), and every point's
+// standardized residual.
+class DrtEstimator {
+ public:
+  using Model = Eigen::Matrix3d;
+  static constexpr int kMinNumSamples = 8;
+
+  DrtEstimator(const ConjugatePoints& points,
+               const RelativeOrientationOptions& options)
+      : points_(points), options_(options), weights_(points.size(), 0.0) {}
+
+  bool Estimate(const std::vector<int>& sample, Model* M) const {
+    for (int i : sample) weights_[i] = 1.0;
+    const bool solved = SolveDrtLinear(
+        points_.u1, points_.u2, weights_, options_.calibrated, M);
+    for (int i : sample) weights_[i] = 0.0;
+    return solved;
+  }
+
+  void Residuals(const Model& M, std::vector<double>* residuals) const {
+    *residuals = StandardizedResiduals(M, points_, options_.residual);
+  }
+
+ private:
+  const ConjugatePoints& points_;
+  const RelativeOrientationOptions& options_;
+  mutable std::vector<double> weights_;  // 1 for the sample's points
+};
 
 Eigen::Matrix3d WeightedDrt(const ConjugatePoints& points,
                             const std::vector<uint8_t>& mask,
@@ -476,37 +512,17 @@ struct LmedsCandidate {
   Eigen::Matrix3d M;
 };
 
-std::vector<LmedsCandidate> LeastMedianOfSquares(
+std::vector<LmedsCandidate> DrtLeastMedianOfSquares(
     const ConjugatePoints& points, const RelativeOrientationOptions& options) {
   const int n = points.size();
-  std::mt19937 rng(options.seed);
-  const std::vector<std::vector<int>> buckets = Buckets(points, 8);
-  std::vector<double> weights(n, 0.0);
-  std::vector<int> sample;
-  std::vector<double> squared;
-  // The few best samples, by median.
-  const size_t kNumPolished = static_cast<size_t>(options.num_candidates);
-  std::vector<std::pair<double, Eigen::Matrix3d>> leaders;
-  for (int j = 0; j < options.num_samples; ++j) {
-    DrawSpreadSample(buckets, &rng, &sample);
-    for (int i : sample) weights[i] = 1.0;
-    Eigen::Matrix3d M;
-    const bool solved =
-        SolveDrtLinear(points.u1, points.u2, weights, options.calibrated, &M);
-    for (int i : sample) weights[i] = 0.0;
-    if (!solved) continue;
-    const double median =
-        MedianOfSquares(M, points, options.residual, &squared);
-    if (leaders.size() < kNumPolished || median < leaders.back().first) {
-      if (leaders.size() == kNumPolished) leaders.pop_back();
-      leaders.emplace_back(median, M);
-      std::sort(leaders.begin(),
-                leaders.end(),
-                [](const auto& a, const auto& b) { return a.first < b.first; });
-    }
-  }
+  SpreadSampler sampler(Buckets(points, 8), options.seed);
+  const LmedsReport<Eigen::Matrix3d> lmeds =
+      LeastMedianOfSquares(DrtEstimator(points, options),
+                           options.num_samples,
+                           &sampler,
+                           options.num_candidates);
   std::vector<LmedsCandidate> candidates;
-  for (const auto& [median, M] : leaders) {
+  for (const auto& [median, M] : lmeds.leaders) {
     const double sigma = 1.48 * (1.0 + 5.0 / (n - 8)) * std::sqrt(median);
     const std::vector<double> residuals =
         StandardizedResiduals(M, points, options.residual);
@@ -519,7 +535,7 @@ std::vector<LmedsCandidate> LeastMedianOfSquares(
     LmedsCandidate candidate{median, M};
     const Eigen::Matrix3d polished = WeightedDrt(points, mask, options, M);
     const double polished_median =
-        MedianOfSquares(polished, points, options.residual, &squared);
+        DrtMedianOfSquares(polished, points, options.residual);
     if (polished_median < median) candidate = {polished_median, polished};
     candidates.push_back(candidate);
   }
@@ -862,7 +878,7 @@ RelativeOrientation EstimateRelativeOrientation(
 
   // (d) LMedS, eqs. (2) and (4).
   const std::vector<LmedsCandidate> candidates =
-      LeastMedianOfSquares(points, options);
+      DrtLeastMedianOfSquares(points, options);
   if (candidates.empty()) {
     // Identical images and pure rotations leave the DRT undetermined.
     if (!NoBase(points,

@@ -2,6 +2,7 @@
 #include "ext/orientation/virtual_fiducials.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/robust_estimator.h"
 #include "ext/core/statistics.h"
 
 #include <Eigen/Dense>
@@ -11,7 +12,6 @@
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <random>
 #include <tuple>
 
 namespace bayon {
@@ -714,6 +714,37 @@ bool CheckFrame(const VirtualFiducialOptions& options,
   return true;
 }
 
+// The line across = slope * along + offset through two edge points (the
+// model is (slope, offset)), and every point's offset across from it.
+class EdgeLineEstimator {
+ public:
+  using Model = Eigen::Vector2d;
+  static constexpr int kMinNumSamples = 2;
+
+  explicit EdgeLineEstimator(const std::vector<Eigen::Vector2d>& points)
+      : points_(points) {}
+
+  bool Estimate(const std::vector<int>& sample, Model* model) const {
+    const Eigen::Vector2d& a = points_[sample[0]];
+    const Eigen::Vector2d& b = points_[sample[1]];
+    const double da = b.x() - a.x();
+    if (std::abs(da) < 1e-9) return false;
+    const double slope = (b.y() - a.y()) / da;
+    *model = Model(slope, a.y() - slope * a.x());
+    return true;
+  }
+
+  void Residuals(const Model& model, std::vector<double>* residuals) const {
+    residuals->resize(points_.size());
+    for (size_t k = 0; k < points_.size(); ++k) {
+      (*residuals)[k] = points_[k].y() - model[0] * points_[k].x() - model[1];
+    }
+  }
+
+ private:
+  const std::vector<Eigen::Vector2d>& points_;
+};
+
 }  // namespace
 
 Eigen::Vector3d FrameEdge::Line() const {
@@ -741,38 +772,20 @@ EdgeLineFit FitEdgeLine(const std::vector<Eigen::Vector2d>& along_across,
   }
 
   // Least median of squares over random pairs.
-  std::mt19937 rng(options.seed);
-  std::uniform_int_distribution<int> pick(0, n - 1);
-  std::vector<double> squares(n);
-  double best_median = std::numeric_limits<double>::infinity();
-  double best_slope = 0, best_offset = 0;
-  for (int s = 0; s < options.num_samples; ++s) {
-    const int i = pick(rng), j = pick(rng);
-    const double da = points[j].x() - points[i].x();
-    if (i == j || std::abs(da) < 1e-9) continue;
-    const double slope = (points[j].y() - points[i].y()) / da;
-    const double offset = points[i].y() - slope * points[i].x();
-    for (int k = 0; k < n; ++k) {
-      const double r = points[k].y() - slope * points[k].x() - offset;
-      squares[k] = r * r;
-    }
-    std::nth_element(squares.begin(), squares.begin() + n / 2, squares.end());
-    if (squares[n / 2] < best_median) {
-      best_median = squares[n / 2];
-      best_slope = slope;
-      best_offset = offset;
-    }
-  }
-  if (!std::isfinite(best_median)) {
+  UniformSampler sampler(n, options.seed);
+  const LmedsReport<Eigen::Vector2d> lmeds = LeastMedianOfSquares(
+      EdgeLineEstimator(points), options.num_samples, &sampler);
+  if (!lmeds.success()) {
     fit.reason = "the edge points do not span a line";
     return fit;
   }
-  fit.sigma_px =
-      std::max(options.min_sigma_px,
-               1.4826 * (1.0 + 5.0 / (n - 2)) * std::sqrt(best_median));
+  fit.sigma_px = std::max(options.min_sigma_px,
+                          1.4826 * (1.0 + 5.0 / (n - 2)) *
+                              std::sqrt(lmeds.best().median_of_squares));
 
   // Rejection and least squares, iterated until the kept set is stable.
-  double slope = best_slope, offset = best_offset, sigma = fit.sigma_px;
+  double slope = lmeds.best().model[0], offset = lmeds.best().model[1];
+  double sigma = fit.sigma_px;
   std::vector<bool> keep(n, false);
   for (int iteration = 0; iteration < 20; ++iteration) {
     std::vector<bool> next(n);
