@@ -11,7 +11,7 @@
 #     fountain ../shared/data/fountain-P11: 11 photographs of a fountain
 #              facade, 3072 x 2048 (configs/facade.ini; about 13 minutes)
 # The photographs' calibrated camera is given to bayon (as a photogrammetrist
-# brings a calibrated camera); COLMAP starts from a guessed focal length.
+# brings a calibrated camera); compare_colmap gives COLMAP the same camera.
 # BAYON_THREADS (default 2) threads; BAYON_DATA_DIR the data folder.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -6,7 +6,7 @@
 // default, `mesh --method poisson --depth 10 --max_hole_edges 50`, and
 // carried back into the photographs: its silhouette against the temple's
 // (`evaluate --silhouette_image_path`). The full-size demo's figures are in
-// the README (scripts/demo.sh temple).
+// docs/benchmarks.md (scripts/demo.sh temple).
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 

@@ -9,7 +9,8 @@
 // model against it (ext/eval/sparse_eval.h, as `bayon evaluate`). Prints the
 // table and writes W/colmap/comparison.json and comparison.txt.
 //
-// W/database.db is never opened: COLMAP works on W/colmap/database.db.
+// W/database.db is only read (bayon's scanned frames, for its model); COLMAP
+// works on W/colmap/database.db.
 // W/colmap/colmap.json, written last, records a finished COLMAP run (stage
 // times, the model); a complete earlier run is reused unless --overwrite 1.
 // When the mapper makes no model (it registers nothing, or fewer images
