@@ -8,7 +8,6 @@
 // draws, and bad input refused in one line.
 #include "ext/colmap/model_io.h"
 #include "ext/core/file_util.h"
-#include "ext/report/xml_testing.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -26,6 +25,7 @@
 
 #include "tests/temple_fixture.h"
 #include "tests/testing.h"
+#include "tests/xml_testing.h"
 
 namespace fs = std::filesystem;
 

@@ -2,7 +2,6 @@
 #include "ext/core/errors.h"
 #include "ext/dense/dense.h"
 #include "ext/dense/fusion.h"
-#include "ext/dense/plane_scene_testing.h"
 #include "ext/image/image_io.h"
 
 #include <gtest/gtest.h>
@@ -10,6 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+
+#include "tests/plane_scene_testing.h"
 
 namespace bayon {
 namespace {

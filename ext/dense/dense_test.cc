@@ -2,7 +2,6 @@
 #include "ext/dense/dense.h"
 
 #include "ext/core/errors.h"
-#include "ext/dense/plane_scene_testing.h"
 #include "ext/image/image_io.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +11,8 @@
 #include <filesystem>
 #include <random>
 #include <set>
+
+#include "tests/plane_scene_testing.h"
 
 namespace bayon {
 namespace {

@@ -14,11 +14,12 @@
 // blunders, the RMS over the points where none of the three blundered.
 #include "ext/dense/dense.h"
 #include "ext/features/moravec.h"
-#include "ext/matching/stereo_gt_testing.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
+
+#include "tests/stereo_gt_testing.h"
 
 namespace bayon {
 namespace {

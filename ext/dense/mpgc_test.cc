@@ -3,12 +3,13 @@
 
 #include "ext/core/errors.h"
 #include "ext/core/random.h"
-#include "ext/dense/plane_scene_testing.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <random>
+
+#include "tests/plane_scene_testing.h"
 
 namespace bayon {
 namespace {

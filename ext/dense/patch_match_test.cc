@@ -2,12 +2,13 @@
 #include "ext/dense/patch_match.h"
 
 #include "ext/core/errors.h"
-#include "ext/dense/plane_scene_testing.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+
+#include "tests/plane_scene_testing.h"
 
 namespace bayon {
 namespace {

@@ -26,7 +26,6 @@
 #include "ext/features/moravec.h"
 #include "ext/image/image_io.h"
 #include "ext/matching/keypoint_refinement.h"
-#include "ext/matching/stereo_gt_testing.h"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
@@ -36,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/stereo_gt_testing.h"
 #include "tests/testing.h"
 
 namespace bayon {

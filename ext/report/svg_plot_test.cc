@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ext/report/svg_plot.h"
 
-#include "ext/report/xml_testing.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <regex>
+
+#include "tests/xml_testing.h"
 
 namespace bayon {
 namespace {

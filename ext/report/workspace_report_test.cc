@@ -5,13 +5,14 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/core/scene.h"
-#include "ext/report/xml_testing.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <filesystem>
+
+#include "tests/xml_testing.h"
 
 namespace bayon {
 namespace {
