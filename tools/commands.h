@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include <string>
+#include <vector>
+
 namespace bayon {
 
 // One function per command, each in tools/<command>.cc. argv[0] is the
@@ -33,5 +36,19 @@ int RunViewer(int argc, char** argv);
 int RunPipeline(int argc, char** argv);
 int RunCompareColmap(int argc, char** argv);
 int RunReport(int argc, char** argv);
+
+// The one table of commands: `bayon <name>` and the pipeline's stages run
+// them.
+struct Command {
+  const char* name;
+  int (*run)(int, char**);
+  const char* description;
+};
+
+// Every command, in the order of the processing chain (docs/architecture.md).
+const std::vector<Command>& Commands();
+
+// The command called `name`, or nullptr.
+const Command* FindCommand(const std::string& name);
 
 }  // namespace bayon
