@@ -78,73 +78,73 @@ void CheckStageOptions(const std::vector<Stage>& stages,
   }
 }
 
-}  // namespace
-
-int RunPipeline(int argc, char** argv) {
-  CommandLine command("pipeline",
-                      "Runs every stage in order, from photographs to the "
-                      "textured model and its report, skipping stages whose "
-                      "outputs are complete and newer than their inputs.");
-  CLI::App& app = command.app();
-  // The pipeline's --config has sections per stage, not this command's own
-  // options, so it is read here rather than by CLI11.
-  app.set_config();
-  PipelineContext c;
+// The command line of `bayon pipeline`.
+struct PipelineArguments {
+  PipelineContext context;
   std::vector<std::string> config_paths;
   std::string from_stage, to_stage;
   bool force = false;
-  int compare_colmap = -1;
-  app.add_option("--workspace_path", c.workspace, "Workspace folder (created)")
-      ->required();
-  app.add_option("--image_path",
-                 c.image_path,
-                 "Folder of the photographs (default: <workspace>/images); "
-                 "never modified");
-  app.add_option("--config",
-                 config_paths,
-                 "INI/TOML with a section per stage ([dense] num_masters = 5) "
-                 "and [pipeline] (features = colmap_sift, sparse = "
-                 "colmap_mapper, compare_colmap = 1); several: later ones win")
-      ->check(CLI::ExistingFile);
-  app.add_option("--from_stage",
-                 from_stage,
-                 "Run from this stage on, even where up to date; earlier "
-                 "stages are left as they are");
-  app.add_option("--to_stage", to_stage, "Stop after this stage");
-  app.add_option("--force", force, "1: run every selected stage again");
-  app.add_option("--compare_colmap",
-                 compare_colmap,
-                 "1: also run stock COLMAP and compare (overrides the "
-                 "config's [pipeline] compare_colmap)")
-      ->check(CLI::Range(0, 1));
-  app.add_option("--num_threads", c.num_threads, "Threads for every stage")
-      ->check(CLI::Range(1, 1024));
-  if (!command.Parse(argc, argv)) return 0;
+  int compare_colmap = -1;  // -1: as the config says
 
-  for (const std::string* stage : {&from_stage, &to_stage}) {
-    if (!stage->empty() && !IsStageName(*stage)) {
-      ThrowInputError("--from_stage/--to_stage: unknown stage '", *stage, "'");
-    }
+  void AddOptions(CLI::App& app) {
+    // The pipeline's --config has sections per stage, not this command's
+    // own options, so it is read here rather than by CLI11.
+    app.set_config();
+    app.add_option(
+           "--workspace_path", context.workspace, "Workspace folder (created)")
+        ->required();
+    app.add_option("--image_path",
+                   context.image_path,
+                   "Folder of the photographs (default: <workspace>/images); "
+                   "never modified");
+    app.add_option("--config",
+                   config_paths,
+                   "INI/TOML with a section per stage ([dense] num_masters = "
+                   "5) and [pipeline] (features = colmap_sift, sparse = "
+                   "colmap_mapper, compare_colmap = 1); several: later ones "
+                   "win")
+        ->check(CLI::ExistingFile);
+    app.add_option("--from_stage",
+                   from_stage,
+                   "Run from this stage on, even where up to date; earlier "
+                   "stages are left as they are");
+    app.add_option("--to_stage", to_stage, "Stop after this stage");
+    app.add_option("--force", force, "1: run every selected stage again");
+    app.add_option("--compare_colmap",
+                   compare_colmap,
+                   "1: also run stock COLMAP and compare (overrides the "
+                   "config's [pipeline] compare_colmap)")
+        ->check(CLI::Range(0, 1));
+    app.add_option(
+           "--num_threads", context.num_threads, "Threads for every stage")
+        ->check(CLI::Range(1, 1024));
   }
-  PipelineConfig config = ReadPipelineConfigs(config_paths);
-  if (compare_colmap >= 0) {
-    config.settings.compare_colmap = std::to_string(compare_colmap);
-  }
-  if (c.image_path.empty()) c.image_path = In(c.workspace, "images");
-  CheckDirectoryExists(c.image_path, "--image_path");
-  const size_t num_images = ListImages(c.image_path).size();
+};
+
+// The workspace's absolute paths, its database and control/; returns the
+// number of photographs, refusing a folder without any.
+size_t ResolveWorkspace(PipelineContext* c) {
+  if (c->image_path.empty()) c->image_path = In(c->workspace, "images");
+  CheckDirectoryExists(c->image_path, "--image_path");
+  const size_t num_images = ListImages(c->image_path).size();
   if (num_images == 0) {
-    ThrowInputError(c.image_path,
+    ThrowInputError(c->image_path,
                     ": no images found (looked for jpg, png, tif, bmp, "
                     "pgm/ppm, webp, jp2, exr, hdr)");
   }
-  c.image_path = fs::absolute(c.image_path).lexically_normal().string();
-  c.workspace = fs::absolute(c.workspace).lexically_normal().string();
-  c.database = In(c.workspace, "database.db");
-  if (fs::is_directory(In(c.workspace, "control"))) {
-    c.control = In(c.workspace, "control");
+  c->image_path = fs::absolute(c->image_path).lexically_normal().string();
+  c->workspace = fs::absolute(c->workspace).lexically_normal().string();
+  c->database = In(c->workspace, "database.db");
+  if (fs::is_directory(In(c->workspace, "control"))) {
+    c->control = In(c->workspace, "control");
   }
-  const std::vector<Stage> stages = MakeStages(c, config);
+  return num_images;
+}
+
+// The indices of the first and last stage to run.
+std::pair<int, int> SelectedStages(const std::vector<Stage>& stages,
+                                   const std::string& from_stage,
+                                   const std::string& to_stage) {
   auto index_of = [&](const std::string& name) {
     for (size_t i = 0; i < stages.size(); ++i) {
       if (stages[i].name == name) return static_cast<int>(i);
@@ -158,93 +158,113 @@ int RunPipeline(int argc, char** argv) {
     ThrowInputError(
         "--from_stage ", from_stage, " comes after --to_stage ", to_stage);
   }
-  CheckStageOptions(stages, config.description);
-  // Matching and everything after it need a second photograph.
-  if (num_images < 2 && stages[last].name != "import" &&
-      stages[last].name != "interior" && stages[last].name != "features") {
-    ThrowInputError(c.image_path,
-                    ": one image; a model needs two or more overlapping "
-                    "photographs (--to_stage features stops before matching)");
-  }
+  return {first, last};
+}
 
-  // Every stage logs in full to W/logs/<stage>.log; the terminal shows the
-  // pipeline's progress, the stages' progress bars, summaries and warnings.
+// Every stage logs in full to W/logs/<stage>.log; the terminal shows the
+// pipeline's progress, the stages' progress bars, summaries and warnings.
+void LogStagesToTheirFiles() {
   FLAGS_logtostderr = false;
   FLAGS_stderrthreshold = google::GLOG_WARNING;
   for (int severity = 0; severity < google::NUM_SEVERITIES; ++severity) {
     google::SetLogDestination(severity, "");
   }
-  fs::create_directories(In(c.workspace, "pipeline"));
-  // One run per workspace: a second would run the same stages into the
-  // same files.
-  const FileLock lock(In(c.workspace, "pipeline/lock"),
-                      StrCat("workspace ", c.workspace));
-  command.StartLog(WorkspaceLogPath(c.workspace, "pipeline"));
-  LOG(INFO) << "config: "
-            << (config.description.empty() ? "(built-in defaults)"
-                                           : config.description);
+}
 
-  const auto start = std::chrono::steady_clock::now();
-  auto seconds_since = [](std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-        .count();
-  };
-  auto elapsed = [&] { return seconds_since(start); };
-  std::vector<StageRun> runs;
-  std::optional<fs::file_time_type> previous_stamp;
-  const int num_selected = last - first + 1;
-  bool ran_any = false;
-  for (int i = 0; i < static_cast<int>(stages.size()); ++i) {
-    const Stage& stage = stages[i];
-    StageRun run;
-    run.name = stage.name;
-    run.program = stage.program;
-    if (i < first || i > last) {
-      run.status = "not selected";
-      runs.push_back(run);
-      if (const auto t = NewestTime(StampPath(c.workspace, stage.name)))
-        previous_stamp = t;
-      continue;
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+// One run over the stages, recording each in pipeline.json.
+class PipelineRun {
+ public:
+  PipelineRun(const PipelineContext& c,
+              const std::string& config,
+              const std::vector<Stage>& stages,
+              const PipelineArguments& arguments,
+              std::pair<int, int> selected)
+      : c_(c),
+        config_(config),
+        stages_(stages),
+        arguments_(arguments),
+        first_(selected.first),
+        last_(selected.second),
+        start_(std::chrono::steady_clock::now()) {}
+
+  // Runs the stages that must run and skips the others; false when a stage
+  // produced nothing usable (bad input throws, naming the stage).
+  bool Run() {
+    for (int i = 0; i < static_cast<int>(stages_.size()); ++i) {
+      if (i < first_ || i > last_) {
+        NotSelected(stages_[i]);
+      } else if (!RunOrSkip(i)) {
+        return false;
+      }
     }
+    WriteRunJson(c_, config_, runs_, SecondsSince(start_));
+    return true;
+  }
+
+  const std::vector<StageRun>& runs() const { return runs_; }
+  double seconds() const { return SecondsSince(start_); }
+
+ private:
+  void NotSelected(const Stage& stage) {
+    runs_.push_back({stage.name, stage.program, "not selected", 0, {}, ""});
+    if (const auto t = NewestTime(StampPath(c_.workspace, stage.name))) {
+      previous_stamp_ = t;
+    }
+  }
+
+  // Why stage i must run, or empty where it is up to date.
+  std::string WhyRunStage(int i, const std::vector<std::string>& words) const {
+    const Stage& stage = stages_[i];
+    const std::string why = WhyRun(
+        stage, words, StampPath(c_.workspace, stage.name), previous_stamp_);
+    if (arguments_.force) return "--force";
+    if (i == first_ && !arguments_.from_stage.empty()) return "--from_stage";
+    if (ran_any_ && why.empty()) return "an earlier stage ran";
+    return why;
+  }
+
+  bool RunOrSkip(int i) {
+    const Stage& stage = stages_[i];
+    StageRun run{stage.name, stage.program, "", 0, {}, ""};
     const std::vector<std::string> words = CommandWords(stage, true);
     run.command = words;
-    std::string why = WhyRun(
-        stage, words, StampPath(c.workspace, stage.name), previous_stamp);
-    if (force || (i == first && !from_stage.empty())) {
-      why = force ? "--force" : "--from_stage";
-    } else if (ran_any && why.empty()) {
-      why = "an earlier stage ran";
-    }
+    const std::string why = WhyRunStage(i, words);
     const std::string counter =
-        StrCat("[", i - first + 1, "/", num_selected, "] ");
+        StrCat("[", i - first_ + 1, "/", last_ - first_ + 1, "] ");
+    const std::string stamp = StampPath(c_.workspace, stage.name);
     if (why.empty()) {
       std::cout << "pipeline: " << counter << stage.name
                 << ": up to date, skipped" << std::endl;
       run.status = "skipped";
-      runs.push_back(run);
-      previous_stamp = NewestTime(StampPath(c.workspace, stage.name));
-      continue;
+      runs_.push_back(run);
+      previous_stamp_ = NewestTime(stamp);
+      return true;
     }
     std::cout << "pipeline: " << counter << stage.name << " (" << why << "), "
-              << FormatSeconds(elapsed()) << " so far" << std::endl;
+              << FormatSeconds(seconds()) << " so far" << std::endl;
     LOG(INFO) << "stage " << stage.name << ": " << why;
-    fs::remove(StampPath(c.workspace, stage.name));
+    fs::remove(stamp);
     RemoveStaleTemporaries(stage);
     const auto stage_start = std::chrono::steady_clock::now();
     // A stage that fails is recorded in pipeline.json before the run stops:
     // bad input (exit 2, the stage named), or nothing usable (exit 1).
     auto record_failure = [&](const std::string& reason) {
-      run.seconds = seconds_since(stage_start);
+      run.seconds = SecondsSince(stage_start);
       run.status = "failed";
       run.reason = reason;
-      runs.push_back(run);
-      WriteRunJson(c, config.description, runs, elapsed());
+      runs_.push_back(run);
+      WriteRunJson(c_, config_, runs_, seconds());
     };
     std::string failure;
     try {
       if (stage.program == "colmap") {
         RunColmapStage(
-            stage, WorkspaceLogPath(c.workspace, "colmap_" + stage.command));
+            stage, WorkspaceLogPath(c_.workspace, "colmap_" + stage.command));
       } else if (RunBayonCommand(stage.command, words) != 0) {
         failure = "produced nothing usable (exit 1)";
       }
@@ -257,38 +277,53 @@ int RunPipeline(int argc, char** argv) {
     if (!failure.empty()) {
       record_failure(failure);
       std::cerr << "pipeline: stage " << stage.name << " failed: " << failure
-                << "; its log is in " << In(c.workspace, "logs") << std::endl;
-      return 1;
+                << "; its log is in " << In(c_.workspace, "logs") << std::endl;
+      return false;
     }
-    run.seconds = seconds_since(stage_start);
-    WriteStamp(StampPath(c.workspace, stage.name), words, run.seconds);
-    previous_stamp = NewestTime(StampPath(c.workspace, stage.name));
-    ran_any = true;
+    run.seconds = SecondsSince(stage_start);
+    WriteStamp(stamp, words, run.seconds);
+    previous_stamp_ = NewestTime(stamp);
+    ran_any_ = true;
     run.status = "ran";
-    runs.push_back(run);
+    runs_.push_back(run);
     // After every stage, so that later stages (compare_colmap, report) and
     // an interrupted run's reader see the times so far.
-    WriteRunJson(c, config.description, runs, elapsed());
+    WriteRunJson(c_, config_, runs_, seconds());
     std::cout << "pipeline: " << counter << stage.name << " done in "
               << FormatSeconds(run.seconds) << std::endl;
+    return true;
   }
-  const double total = elapsed();
-  WriteRunJson(c, config.description, runs, total);
 
+  const PipelineContext& c_;
+  const std::string config_;
+  const std::vector<Stage>& stages_;
+  const PipelineArguments& arguments_;
+  const int first_, last_;
+  const std::chrono::steady_clock::time_point start_;
+  std::vector<StageRun> runs_;
+  std::optional<fs::file_time_type> previous_stamp_;
+  bool ran_any_ = false;
+};
+
+// The table of the selected stages, and the summary line: what ran and
+// where the products are, those this run (or an earlier one) made.
+void PrintOutcome(const CommandLine& command,
+                  const PipelineContext& c,
+                  const PipelineRun& run) {
   std::ostringstream table;
   table << "\n  stage            program  status         time\n";
   int num_ran = 0, num_skipped = 0;
-  for (const StageRun& run : runs) {
-    if (run.status == "not selected") continue;
-    num_ran += run.status == "ran";
-    num_skipped += run.status == "skipped";
-    table << "  " << std::left << std::setw(17) << run.name << std::setw(9)
-          << run.program << std::setw(10) << run.status << std::right
+  for (const StageRun& stage : run.runs()) {
+    if (stage.status == "not selected") continue;
+    num_ran += stage.status == "ran";
+    num_skipped += stage.status == "skipped";
+    table << "  " << std::left << std::setw(17) << stage.name << std::setw(9)
+          << stage.program << std::setw(10) << stage.status << std::right
           << std::setw(10)
-          << (run.status == "ran" ? FormatSeconds(run.seconds) : "-") << "\n";
+          << (stage.status == "ran" ? FormatSeconds(stage.seconds) : "-")
+          << "\n";
   }
   std::cout << table.str() << std::endl;
-  // Where the products are, those this run (or an earlier one) made.
   std::string products;
   for (const auto& [label, path] :
        std::vector<std::pair<std::string, std::string>>{
@@ -304,8 +339,58 @@ int RunPipeline(int argc, char** argv) {
              " stages ran, ",
              num_skipped,
              " up to date, in ",
-             FormatSeconds(total),
+             FormatSeconds(run.seconds()),
              products.empty() ? StrCat(" -> ", c.workspace) : products));
+}
+
+}  // namespace
+
+int RunPipeline(int argc, char** argv) {
+  CommandLine command("pipeline",
+                      "Runs every stage in order, from photographs to the "
+                      "textured model and its report, skipping stages whose "
+                      "outputs are complete and newer than their inputs.");
+  PipelineArguments arguments;
+  arguments.AddOptions(command.app());
+  if (!command.Parse(argc, argv)) return 0;
+
+  for (const std::string* stage :
+       {&arguments.from_stage, &arguments.to_stage}) {
+    if (!stage->empty() && !IsStageName(*stage)) {
+      ThrowInputError("--from_stage/--to_stage: unknown stage '", *stage, "'");
+    }
+  }
+  PipelineConfig config = ReadPipelineConfigs(arguments.config_paths);
+  if (arguments.compare_colmap >= 0) {
+    config.settings.compare_colmap = std::to_string(arguments.compare_colmap);
+  }
+  PipelineContext& c = arguments.context;
+  const size_t num_images = ResolveWorkspace(&c);
+  const std::vector<Stage> stages = MakeStages(c, config);
+  const auto [first, last] =
+      SelectedStages(stages, arguments.from_stage, arguments.to_stage);
+  CheckStageOptions(stages, config.description);
+  // Matching and everything after it need a second photograph.
+  if (num_images < 2 && stages[last].name != "import" &&
+      stages[last].name != "interior" && stages[last].name != "features") {
+    ThrowInputError(c.image_path,
+                    ": one image; a model needs two or more overlapping "
+                    "photographs (--to_stage features stops before matching)");
+  }
+
+  LogStagesToTheirFiles();
+  fs::create_directories(In(c.workspace, "pipeline"));
+  // One run per workspace: a second would run the same stages into the
+  // same files.
+  const FileLock lock(In(c.workspace, "pipeline/lock"),
+                      StrCat("workspace ", c.workspace));
+  command.StartLog(WorkspaceLogPath(c.workspace, "pipeline"));
+  LOG(INFO) << "config: "
+            << (config.description.empty() ? "(built-in defaults)"
+                                           : config.description);
+  PipelineRun run(c, config.description, stages, arguments, {first, last});
+  if (!run.Run()) return 1;
+  PrintOutcome(command, c, run);
   return 0;
 }
 
