@@ -11,17 +11,15 @@
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
 #include "ext/image/image_io.h"
+#include "ext/pipeline/pipeline_run.h"
 #include "ext/pipeline/stages.h"
-#include "ext/pipeline/stamps.h"
 #include "tools/command.h"
 #include "tools/commands.h"
 
 #include <algorithm>
-#include <chrono>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
-#include <optional>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -42,17 +40,6 @@ int RunBayonCommand(const std::string& command,
   for (std::string& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);
   return FindCommand(command)->run(static_cast<int>(args.size()), argv.data());
-}
-
-std::string FormatSeconds(double seconds) {
-  std::ostringstream out;
-  if (seconds < 60) {
-    out << std::fixed << std::setprecision(1) << seconds << " s";
-  } else {
-    out << static_cast<int>(seconds) / 60 << " min " << std::setw(2)
-        << std::setfill('0') << static_cast<int>(seconds) % 60 << " s";
-  }
-  return out.str();
 }
 
 // Each stage checks its options (CommandLine::SetCheckOnly) before any
@@ -171,140 +158,6 @@ void LogStagesToTheirFiles() {
   }
 }
 
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-// One run over the stages, recording each in pipeline.json.
-class PipelineRun {
- public:
-  PipelineRun(const PipelineContext& c,
-              const std::string& config,
-              const std::vector<Stage>& stages,
-              const PipelineArguments& arguments,
-              std::pair<int, int> selected)
-      : c_(c),
-        config_(config),
-        stages_(stages),
-        arguments_(arguments),
-        first_(selected.first),
-        last_(selected.second),
-        start_(std::chrono::steady_clock::now()) {}
-
-  // Runs the stages that must run and skips the others; false when a stage
-  // produced nothing usable (bad input throws, naming the stage).
-  bool Run() {
-    for (int i = 0; i < static_cast<int>(stages_.size()); ++i) {
-      if (i < first_ || i > last_) {
-        NotSelected(stages_[i]);
-      } else if (!RunOrSkip(i)) {
-        return false;
-      }
-    }
-    WriteRunJson(c_, config_, runs_, SecondsSince(start_));
-    return true;
-  }
-
-  const std::vector<StageRun>& runs() const { return runs_; }
-  double seconds() const { return SecondsSince(start_); }
-
- private:
-  void NotSelected(const Stage& stage) {
-    runs_.push_back({stage.name, stage.program, "not selected", 0, {}, ""});
-    if (const auto t = NewestTime(StampPath(c_.workspace, stage.name))) {
-      previous_stamp_ = t;
-    }
-  }
-
-  // Why stage i must run, or empty where it is up to date.
-  std::string WhyRunStage(int i, const std::vector<std::string>& words) const {
-    const Stage& stage = stages_[i];
-    const std::string why = WhyRun(
-        stage, words, StampPath(c_.workspace, stage.name), previous_stamp_);
-    if (arguments_.force) return "--force";
-    if (i == first_ && !arguments_.from_stage.empty()) return "--from_stage";
-    if (ran_any_ && why.empty()) return "an earlier stage ran";
-    return why;
-  }
-
-  bool RunOrSkip(int i) {
-    const Stage& stage = stages_[i];
-    StageRun run{stage.name, stage.program, "", 0, {}, ""};
-    const std::vector<std::string> words = CommandWords(stage, true);
-    run.command = words;
-    const std::string why = WhyRunStage(i, words);
-    const std::string counter =
-        StrCat("[", i - first_ + 1, "/", last_ - first_ + 1, "] ");
-    const std::string stamp = StampPath(c_.workspace, stage.name);
-    if (why.empty()) {
-      std::cout << "pipeline: " << counter << stage.name
-                << ": up to date, skipped" << std::endl;
-      run.status = "skipped";
-      runs_.push_back(run);
-      previous_stamp_ = NewestTime(stamp);
-      return true;
-    }
-    std::cout << "pipeline: " << counter << stage.name << " (" << why << "), "
-              << FormatSeconds(seconds()) << " so far" << std::endl;
-    LOG(INFO) << "stage " << stage.name << ": " << why;
-    fs::remove(stamp);
-    RemoveStaleTemporaries(stage);
-    const auto stage_start = std::chrono::steady_clock::now();
-    // A stage that fails is recorded in pipeline.json before the run stops:
-    // bad input (exit 2, the stage named), or nothing usable (exit 1).
-    auto record_failure = [&](const std::string& reason) {
-      run.seconds = SecondsSince(stage_start);
-      run.status = "failed";
-      run.reason = reason;
-      runs_.push_back(run);
-      WriteRunJson(c_, config_, runs_, seconds());
-    };
-    std::string failure;
-    try {
-      if (stage.program == "colmap") {
-        RunColmapStage(
-            stage, WorkspaceLogPath(c_.workspace, "colmap_" + stage.command));
-      } else if (RunBayonCommand(stage.command, words) != 0) {
-        failure = "produced nothing usable (exit 1)";
-      }
-    } catch (const InputError& error) {
-      record_failure(error.what());
-      ThrowInputError("stage ", stage.name, ": ", error.what());
-    } catch (const std::exception& error) {
-      failure = error.what();
-    }
-    if (!failure.empty()) {
-      record_failure(failure);
-      std::cerr << "pipeline: stage " << stage.name << " failed: " << failure
-                << "; its log is in " << In(c_.workspace, "logs") << std::endl;
-      return false;
-    }
-    run.seconds = SecondsSince(stage_start);
-    WriteStamp(stamp, words, run.seconds);
-    previous_stamp_ = NewestTime(stamp);
-    ran_any_ = true;
-    run.status = "ran";
-    runs_.push_back(run);
-    // After every stage, so that later stages (compare_colmap, report) and
-    // an interrupted run's reader see the times so far.
-    WriteRunJson(c_, config_, runs_, seconds());
-    std::cout << "pipeline: " << counter << stage.name << " done in "
-              << FormatSeconds(run.seconds) << std::endl;
-    return true;
-  }
-
-  const PipelineContext& c_;
-  const std::string config_;
-  const std::vector<Stage>& stages_;
-  const PipelineArguments& arguments_;
-  const int first_, last_;
-  const std::chrono::steady_clock::time_point start_;
-  std::vector<StageRun> runs_;
-  std::optional<fs::file_time_type> previous_stamp_;
-  bool ran_any_ = false;
-};
-
 // The table of the selected stages, and the summary line: what ran and
 // where the products are, those this run (or an earlier one) made.
 void PrintOutcome(const CommandLine& command,
@@ -320,7 +173,7 @@ void PrintOutcome(const CommandLine& command,
     table << "  " << std::left << std::setw(17) << stage.name << std::setw(9)
           << stage.program << std::setw(10) << stage.status << std::right
           << std::setw(10)
-          << (stage.status == "ran" ? FormatSeconds(stage.seconds) : "-")
+          << (stage.status == "ran" ? FormatRunSeconds(stage.seconds) : "-")
           << "\n";
   }
   std::cout << table.str() << std::endl;
@@ -339,7 +192,7 @@ void PrintOutcome(const CommandLine& command,
              " stages ran, ",
              num_skipped,
              " up to date, in ",
-             FormatSeconds(run.seconds()),
+             FormatRunSeconds(run.seconds()),
              products.empty() ? StrCat(" -> ", c.workspace) : products));
 }
 
@@ -388,7 +241,12 @@ int RunPipeline(int argc, char** argv) {
   LOG(INFO) << "config: "
             << (config.description.empty() ? "(built-in defaults)"
                                            : config.description);
-  PipelineRun run(c, config.description, stages, arguments, {first, last});
+  StageSelection selection;
+  selection.first = first;
+  selection.last = last;
+  selection.force = arguments.force;
+  selection.from_stage = !arguments.from_stage.empty();
+  PipelineRun run(c, config.description, stages, selection, RunBayonCommand);
   if (!run.Run()) return 1;
   PrintOutcome(command, c, run);
   return 0;
