@@ -6,10 +6,14 @@
 //   refused, options of every kind the commands declare (text, integers,
 //   doubles, flags, lists, a choice); then the effective options are written
 //   out, as each command's log does;
-// - `bayon pipeline --config` (tools/pipeline.cc ReadConfigs): the items of
-//   CLI::ConfigINI, walked as the pipeline walks them (section, dotted key,
-//   joined inputs).
-// CLI::ParseError is a command's way to refuse a file (main.cc prints it).
+// - `bayon pipeline --config`: ReadPipelineConfigs (ext/pipeline/stages.h)
+//   itself, which walks CLI::ConfigINI's items (section, dotted key, joined
+//   inputs) into the stages' options.
+// CLI::ParseError is a command's way to refuse a file (main.cc prints it),
+// InputError the pipeline's.
+#include "ext/core/errors.h"
+#include "ext/pipeline/stages.h"
+
 #include <CLI/CLI.hpp>
 
 #include <cstddef>
@@ -53,26 +57,10 @@ void ParseAsCommand(const std::string& path) {
 }
 
 void ReadAsPipeline(const std::string& path) {
-  std::vector<CLI::ConfigItem> items;
   try {
-    items = CLI::ConfigINI().from_file(path);
-  } catch (const std::exception&) {
-    return;  // ReadConfigs turns any failure here into an InputError
+    bayon::ReadPipelineConfigs({path});
+  } catch (const bayon::InputError&) {
   }
-  size_t total = 0;
-  for (const CLI::ConfigItem& item : items) {
-    if (item.name == "++" || item.name == "--" || item.parents.empty()) {
-      continue;
-    }
-    const std::string& section = item.parents[0];
-    const std::string key = item.fullname().substr(section.size() + 1);
-    std::string value;
-    for (const std::string& input : item.inputs) {
-      value += (value.empty() ? "" : ",") + input;
-    }
-    total += key.size() + value.size();
-  }
-  (void)total;
 }
 
 }  // namespace
