@@ -60,11 +60,13 @@ void PipelineRun::NotSelected(const Stage& stage) {
 
 std::string PipelineRun::WhyRunStage(
     int i, const std::vector<std::string>& words) const {
+  // The flags decide before the stamp is read and the inputs (the whole
+  // image folder) are walked.
+  if (selection_.force) return "--force";
+  if (i == selection_.first && selection_.from_stage) return "--from_stage";
   const Stage& stage = stages_[i];
   const std::string why = WhyRun(
       stage, words, StampPath(c_.workspace, stage.name), previous_stamp_);
-  if (selection_.force) return "--force";
-  if (i == selection_.first && selection_.from_stage) return "--from_stage";
   if (ran_any_ && why.empty()) return "an earlier stage ran";
   return why;
 }
