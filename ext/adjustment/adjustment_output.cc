@@ -5,13 +5,13 @@
 #include "ext/core/camera_conversion.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/core/string_printf.h"
 
 #include <glog/logging.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <map>
 
@@ -27,15 +27,6 @@ Json Vec(const Eigen::Vector3d& v) { return Json::array({v(0), v(1), v(2)}); }
 
 Eigen::Vector3d StdDevs(const Eigen::Matrix3d& covariance) {
   return covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-}
-
-std::string Printf(const char* format, ...) {
-  char buffer[512];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(buffer, sizeof(buffer), format, args);
-  va_end(args);
-  return buffer;
 }
 
 // Units of the camera parameters, for the printout.
@@ -587,7 +578,7 @@ class ReportBuilder {
 std::string Rule(char c = '-') { return std::string(79, c) + "\n"; }
 
 std::string Triple(const Json& v, const char* format) {
-  return Printf(
+  return StringPrintf(
       format, v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
 }
 
@@ -598,48 +589,49 @@ std::string Printout(const Json& r) {
       " bayon adjust: self-calibrating bundle adjustment (SGAP after Gruen, "
       "Zhang,\n Visnovcova, Bayon tower, section 3.2.4)\n";
   out += Rule('=');
-  out += Printf(" %-18s %s\n",
-                "input model",
-                r["input"]["input_path"].get<std::string>().c_str());
-  out += Printf(" %-18s %s\n",
-                "database",
-                r["input"]["database_path"].get<std::string>().c_str());
+  out += StringPrintf(" %-18s %s\n",
+                      "input model",
+                      r["input"]["input_path"].get<std::string>().c_str());
+  out += StringPrintf(" %-18s %s\n",
+                      "database",
+                      r["input"]["database_path"].get<std::string>().c_str());
   const std::string control = r["input"]["control_path"].get<std::string>();
-  out += Printf(
+  out += StringPrintf(
       " %-18s %s\n", "control", control.empty() ? "(none)" : control.c_str());
-  out += Printf(" %-18s %s: %s\n",
-                "datum",
-                r["datum"]["type"].get<std::string>().c_str(),
-                r["datum"]["description"].get<std::string>().c_str());
+  out += StringPrintf(" %-18s %s: %s\n",
+                      "datum",
+                      r["datum"]["type"].get<std::string>().c_str(),
+                      r["datum"]["description"].get<std::string>().c_str());
   for (const Json& camera : r["cameras"]) {
-    out += Printf(" %-18s %u %s from %s",
-                  "camera",
-                  camera["camera_id"].get<unsigned>(),
-                  camera["model"].get<std::string>().c_str(),
-                  camera["source"].get<std::string>().c_str());
+    out += StringPrintf(" %-18s %u %s from %s",
+                        "camera",
+                        camera["camera_id"].get<unsigned>(),
+                        camera["model"].get<std::string>().c_str(),
+                        camera["source"].get<std::string>().c_str());
     if (camera.contains("conversion_rms_px")) {
-      out += Printf(" (fit %.3f px RMS)",
-                    camera["conversion_rms_px"].get<double>());
+      out += StringPrintf(" (fit %.3f px RMS)",
+                          camera["conversion_rms_px"].get<double>());
     }
     out += "\n";
   }
   if (r["datum"].contains("similarity_residuals")) {
     out += "\n 7-PARAMETER SIMILARITY MODEL -> OBJECT (approximations)\n";
     const Json& sim = r["datum"]["object_from_model"];
-    out += Printf("   scale %.6f   RMS residual %.1f mm\n",
-                  sim["scale"].get<double>(),
-                  kMm * r["datum"]["similarity_rms_m"].get<double>());
+    out += StringPrintf("   scale %.6f   RMS residual %.1f mm\n",
+                        sim["scale"].get<double>(),
+                        kMm * r["datum"]["similarity_rms_m"].get<double>());
     for (const Json& res : r["datum"]["similarity_residuals"]) {
-      out += Printf("   %-12s %s%s\n",
-                    res["name"].get<std::string>().c_str(),
-                    Triple(res["residual_m"], "%9.4f %9.4f %9.4f m").c_str(),
-                    res["inlier"].get<bool>() ? "" : "   SUSPECT");
+      out +=
+          StringPrintf("   %-12s %s%s\n",
+                       res["name"].get<std::string>().c_str(),
+                       Triple(res["residual_m"], "%9.4f %9.4f %9.4f m").c_str(),
+                       res["inlier"].get<bool>() ? "" : "   SUSPECT");
     }
   }
   if (r["datum"].contains("precision")) {
-    out += Printf(" %-18s %s\n",
-                  "standard dev.",
-                  r["datum"]["precision"].get<std::string>().c_str());
+    out += StringPrintf(" %-18s %s\n",
+                        "standard dev.",
+                        r["datum"]["precision"].get<std::string>().c_str());
   }
   if (r["datum"]["type"] == "free") {
     out +=
@@ -652,76 +644,81 @@ std::string Printout(const Json& r) {
 
   out += "\n ITERATIONS\n";
   for (const Json& step : r["steps"]) {
-    out += Printf("   %-40s %4d it.",
-                  step["name"].get<std::string>().c_str(),
-                  step["iterations"].get<int>());
+    out += StringPrintf("   %-40s %4d it.",
+                        step["name"].get<std::string>().c_str(),
+                        step["iterations"].get<int>());
     if (step["sigma0_px"].get<double>() > 0) {
-      out += Printf("   sigma0 %8.4f px", step["sigma0_px"].get<double>());
+      out +=
+          StringPrintf("   sigma0 %8.4f px", step["sigma0_px"].get<double>());
     }
-    out += Printf("   %6.2f s\n", step["time_s"].get<double>());
+    out += StringPrintf("   %6.2f s\n", step["time_s"].get<double>());
   }
 
   const Json& s = r["statistics"];
   out += "\n" + Rule();
   out += " STATISTICS\n" + Rule();
-  out += Printf("   images                                   %8d\n",
-                s["num_images"].get<int>());
-  out += Printf("   tie points                               %8d   by rays:",
-                s["num_tie_points"].get<int>());
+  out += StringPrintf("   images                                   %8d\n",
+                      s["num_images"].get<int>());
+  out +=
+      StringPrintf("   tie points                               %8d   by rays:",
+                   s["num_tie_points"].get<int>());
   for (const auto& [rays, count] : s["tie_points_by_rays"].items()) {
-    out += Printf(" %s:%d", rays.c_str(), count.get<int>());
+    out += StringPrintf(" %s:%d", rays.c_str(), count.get<int>());
   }
   out += "\n";
-  out += Printf("   control points / check points            %8d / %d\n",
-                s["num_control_points"].get<int>(),
-                s["num_check_points"].get<int>());
-  out += Printf(
+  out += StringPrintf("   control points / check points            %8d / %d\n",
+                      s["num_control_points"].get<int>(),
+                      s["num_check_points"].get<int>());
+  out += StringPrintf(
       "   observations                         n = %8d   (image "
       "coordinates %d)\n",
       s["n"].get<int>(),
       s["n_image_coordinates"].get<int>());
-  out += Printf("   unknowns                             u = %8d\n",
-                s["u"].get<int>());
-  out += Printf("   datum defect                         d = %8d\n",
-                s["d"].get<int>());
-  out += Printf("   redundancy                           r = %8d\n",
-                s["r"].get<int>());
-  out += Printf("   global internal reliability        r/n = %8.3f\n",
-                s["r_over_n"].get<double>());
-  out += Printf("   sigma0 a priori                          %8.4f px\n",
-                s["sigma0_apriori_px"].get<double>());
-  out += Printf("   sigma0 a posteriori                  s0 = %8.4f px",
-                s["sigma0_px"].get<double>());
+  out += StringPrintf("   unknowns                             u = %8d\n",
+                      s["u"].get<int>());
+  out += StringPrintf("   datum defect                         d = %8d\n",
+                      s["d"].get<int>());
+  out += StringPrintf("   redundancy                           r = %8d\n",
+                      s["r"].get<int>());
+  out += StringPrintf("   global internal reliability        r/n = %8.3f\n",
+                      s["r_over_n"].get<double>());
+  out += StringPrintf("   sigma0 a priori                          %8.4f px\n",
+                      s["sigma0_apriori_px"].get<double>());
+  out += StringPrintf("   sigma0 a posteriori                  s0 = %8.4f px",
+                      s["sigma0_px"].get<double>());
   if (s.contains("sigma0_image_um")) {
-    out += Printf(" = %.2f micron", s["sigma0_image_um"].get<double>());
+    out += StringPrintf(" = %.2f micron", s["sigma0_image_um"].get<double>());
   }
   out += "\n";
   if (s.contains("variance_components")) {
     out += "   variance components (a priori variances scaled per group):\n";
     for (const Json& c : s["variance_components"]) {
-      out += Printf("     %-26s %7d points  r = %9.1f  x %8.4f  -> %.4f px\n",
-                    c["group"].get<std::string>().c_str(),
-                    c["num_observations"].get<int>(),
-                    c["redundancy"].get<double>(),
-                    c["variance_scale"].get<double>(),
-                    c["median_sigma_px"].get<double>());
+      out += StringPrintf(
+          "     %-26s %7d points  r = %9.1f  x %8.4f  -> %.4f px\n",
+          c["group"].get<std::string>().c_str(),
+          c["num_observations"].get<int>(),
+          c["redundancy"].get<double>(),
+          c["variance_scale"].get<double>(),
+          c["median_sigma_px"].get<double>());
     }
   }
   if (s.contains("residual_rms_px")) {
-    out += Printf(
+    out += StringPrintf(
         "   RMS of image residuals x, y              %8.4f %8.4f "
         "px   (max %.3f px)\n",
         s["residual_rms_px"][0].get<double>(),
         s["residual_rms_px"][1].get<double>(),
         s["residual_max_px"].get<double>());
-    out += Printf("   mean reprojection error (COLMAP's)       %8.4f px\n",
-                  s["mean_reprojection_error_px"].get<double>());
-    out += Printf("   redundancy numbers, mean / min           %8.3f / %.3f\n",
-                  s["redundancy_number_mean"].get<double>(),
-                  s["redundancy_number_min"].get<double>());
+    out +=
+        StringPrintf("   mean reprojection error (COLMAP's)       %8.4f px\n",
+                     s["mean_reprojection_error_px"].get<double>());
+    out += StringPrintf(
+        "   redundancy numbers, mean / min           %8.3f / %.3f\n",
+        s["redundancy_number_mean"].get<double>(),
+        s["redundancy_number_min"].get<double>());
   }
   if (s.contains("point_precision_rms_mm")) {
-    out += Printf(
+    out += StringPrintf(
         "   theoretical precision of the tie points (RMS; without the %d "
         "whose rays meet at less than %.1f deg):\n",
         s["num_weak_tie_points"].get<int>(),
@@ -744,66 +741,70 @@ std::string Printout(const Json& r) {
 
   const Json& sc = r["self_calibration"];
   out += "\n" + Rule();
-  out += Printf(" CAMERA PARAMETERS (self-calibration: %s, t-test at %.2f)\n",
-                sc["mode"].get<std::string>().c_str(),
-                sc["significance_t"].get<double>());
+  out += StringPrintf(
+      " CAMERA PARAMETERS (self-calibration: %s, t-test at %.2f)\n",
+      sc["mode"].get<std::string>().c_str(),
+      sc["significance_t"].get<double>());
   out += Rule();
   out +=
       "   camera  parameter          value        std dev        t   unit"
       "     max corr. with ext. or.\n";
   for (const Json& p : sc["parameters"]) {
-    out += Printf(
+    out += StringPrintf(
         "   %6u  %-9s %14.6e %14.6e %8s   %-6s %6.2f\n",
         p["camera_id"].get<unsigned>(),
         p["name"].get<std::string>().c_str(),
         p["value"].get<double>(),
         p["std_dev"].get<double>(),
-        p["t"].is_null() ? "-" : Printf("%.1f", p["t"].get<double>()).c_str(),
+        p["t"].is_null() ? "-"
+                         : StringPrintf("%.1f", p["t"].get<double>()).c_str(),
         p["unit"].get<std::string>().c_str(),
         p["max_correlation_exterior"].get<double>());
   }
   for (const Json& p : sc["removed"]) {
-    out += Printf("   removed %-9s %14.6e %14.6e %8.2f   %s\n",
-                  p["name"].get<std::string>().c_str(),
-                  p["value"].get<double>(),
-                  p["std_dev"].get<double>(),
-                  p["t"].get<double>(),
-                  p["reason"].get<std::string>().c_str());
+    out += StringPrintf("   removed %-9s %14.6e %14.6e %8.2f   %s\n",
+                        p["name"].get<std::string>().c_str(),
+                        p["value"].get<double>(),
+                        p["std_dev"].get<double>(),
+                        p["t"].get<double>(),
+                        p["reason"].get<std::string>().c_str());
   }
   for (const Json& c : sc["correlations"]) {
     const std::vector<std::string> names = c["names"];
     if (names.size() < 2) continue;
-    out += Printf("\n   correlation matrix, camera %u\n          ",
-                  c["camera_id"].get<unsigned>());
-    for (const std::string& name : names) out += Printf("%7s", name.c_str());
+    out += StringPrintf("\n   correlation matrix, camera %u\n          ",
+                        c["camera_id"].get<unsigned>());
+    for (const std::string& name : names)
+      out += StringPrintf("%7s", name.c_str());
     out += "\n";
     for (size_t i = 0; i < names.size(); ++i) {
-      out += Printf("   %-6s", names[i].c_str());
+      out += StringPrintf("   %-6s", names[i].c_str());
       for (size_t j = 0; j < names.size(); ++j) {
-        out += Printf("%7.2f", c["matrix"][i][j].get<double>());
+        out += StringPrintf("%7.2f", c["matrix"][i][j].get<double>());
       }
       out += "\n";
     }
   }
   if (!sc["flagged_correlations"].empty()) {
-    out += Printf("   correlations above %.2f:",
-                  sc["max_correlation"].get<double>());
+    out += StringPrintf("   correlations above %.2f:",
+                        sc["max_correlation"].get<double>());
     for (const Json& f : sc["flagged_correlations"]) {
-      out += Printf(" %s-%s %.3f;",
-                    f["parameters"][0].get<std::string>().c_str(),
-                    f["parameters"][1].get<std::string>().c_str(),
-                    f["correlation"].get<double>());
+      out += StringPrintf(" %s-%s %.3f;",
+                          f["parameters"][0].get<std::string>().c_str(),
+                          f["parameters"][1].get<std::string>().c_str(),
+                          f["correlation"].get<double>());
     }
     out += "\n";
   }
 
   const Json& b = r["blunder_detection"];
   out += "\n" + Rule();
-  out += Printf(" BLUNDER DETECTION (%s; data snooping, critical value %.2f)\n",
-                b["method"].get<std::string>().c_str(),
-                b["critical_value"].get<double>());
+  out += StringPrintf(
+      " BLUNDER DETECTION (%s; data snooping, critical value %.2f)\n",
+      b["method"].get<std::string>().c_str(),
+      b["critical_value"].get<double>());
   out += Rule();
-  out += Printf(
+  out += StringPrintf(
       "   %zu observations rejected in %d iterations, %d tie points "
       "left with fewer than two rays\n",
       b["rejected"].size(),
@@ -814,13 +815,13 @@ std::string Printout(const Json& r) {
         "   image                      point          vx [px]   vy [px]"
         "       w      r\n";
     for (const Json& o : b["rejected"]) {
-      out += Printf("   %-26s %-12s %9.2f %9.2f %7.1f %6.3f\n",
-                    o["image"].get<std::string>().c_str(),
-                    o["point"].get<std::string>().c_str(),
-                    o["residual_px"][0].get<double>(),
-                    o["residual_px"][1].get<double>(),
-                    o["w"].get<double>(),
-                    o["redundancy"].get<double>());
+      out += StringPrintf("   %-26s %-12s %9.2f %9.2f %7.1f %6.3f\n",
+                          o["image"].get<std::string>().c_str(),
+                          o["point"].get<std::string>().c_str(),
+                          o["residual_px"][0].get<double>(),
+                          o["residual_px"][1].get<double>(),
+                          o["w"].get<double>(),
+                          o["redundancy"].get<double>());
     }
   }
 
@@ -832,18 +833,19 @@ std::string Printout(const Json& r) {
         "   name          dX [mm]   dY [mm]   dZ [mm]    sX [mm]   sY "
         "[mm]   sZ [mm]  rays  |d|/s\n";
     for (const Json& p : checks["points"]) {
-      out += Printf("   %-10s %s  %s %5d %6.2f\n",
-                    p["name"].get<std::string>().c_str(),
-                    Triple(p["difference_mm"], "%9.2f %9.2f %9.2f").c_str(),
-                    Triple(p["std_dev_mm"], "%9.2f %9.2f %9.2f").c_str(),
-                    p["rays"].get<int>(),
-                    p["max_normalized_difference"].get<double>());
+      out +=
+          StringPrintf("   %-10s %s  %s %5d %6.2f\n",
+                       p["name"].get<std::string>().c_str(),
+                       Triple(p["difference_mm"], "%9.2f %9.2f %9.2f").c_str(),
+                       Triple(p["std_dev_mm"], "%9.2f %9.2f %9.2f").c_str(),
+                       p["rays"].get<int>(),
+                       p["max_normalized_difference"].get<double>());
     }
     out +=
         "   (s: the adjusted point's; |d|/s: the largest difference over "
         "its standard deviation, the given coordinates' included)\n";
     out += "   RMS        " + Triple(checks["rms_mm"], "%9.2f %9.2f %9.2f") +
-           Printf("    3D: %.2f mm\n", checks["rms_3d_mm"].get<double>());
+           StringPrintf("    3D: %.2f mm\n", checks["rms_3d_mm"].get<double>());
   }
   if (!r["control_points"].empty()) {
     out += "\n" + Rule();
@@ -854,22 +856,22 @@ std::string Printout(const Json& r) {
     for (const Json& p : r["control_points"]) {
       std::string held;
       for (int k = 0; k < 3; ++k) held += p["fixed"][k].get<bool>() ? "F" : "w";
-      out += Printf("   %-10s %s  %s   %s %5d\n",
-                    p["name"].get<std::string>().c_str(),
-                    Triple(p["adjusted"], "%12.4f %12.4f %12.4f").c_str(),
-                    held.c_str(),
-                    Triple(p["residual_mm"], "%7.2f %7.2f %7.2f").c_str(),
-                    p["rays"].get<int>());
+      out += StringPrintf("   %-10s %s  %s   %s %5d\n",
+                          p["name"].get<std::string>().c_str(),
+                          Triple(p["adjusted"], "%12.4f %12.4f %12.4f").c_str(),
+                          held.c_str(),
+                          Triple(p["residual_mm"], "%7.2f %7.2f %7.2f").c_str(),
+                          p["rays"].get<int>());
     }
   }
   if (!r["distances"].empty()) {
     out += "\n DISTANCES\n";
     for (const Json& d : r["distances"]) {
-      out += Printf("   %s-%s  given %.4f m  adjusted %.4f m\n",
-                    d["points"][0].get<std::string>().c_str(),
-                    d["points"][1].get<std::string>().c_str(),
-                    d["given_m"].get<double>(),
-                    d["adjusted_m"].get<double>());
+      out += StringPrintf("   %s-%s  given %.4f m  adjusted %.4f m\n",
+                          d["points"][0].get<std::string>().c_str(),
+                          d["points"][1].get<std::string>().c_str(),
+                          d["given_m"].get<double>(),
+                          d["adjusted_m"].get<double>());
     }
   }
 
@@ -879,7 +881,7 @@ std::string Printout(const Json& r) {
       "   image                         X0 [m]       Y0 [m]       Z0 [m]"
       "   sX0   sY0   sZ0 [mm]  srx  sry  srz [mdeg]\n";
   for (const Json& image : r["images"]) {
-    out += Printf(
+    out += StringPrintf(
         "   %-24s %s %s %s\n",
         image["name"].get<std::string>().c_str(),
         Triple(image["center"], "%12.4f %12.4f %12.4f").c_str(),
@@ -896,12 +898,12 @@ std::string Printout(const Json& r) {
     const std::string label =
         p.contains("name") ? p["name"].get<std::string>()
                            : std::to_string(p["point3D_id"].get<uint64_t>());
-    out += Printf("   %-14s %-7s %s %s %4d\n",
-                  label.c_str(),
-                  p["kind"].get<std::string>().c_str(),
-                  Triple(p["xyz"], "%12.4f %12.4f %12.4f").c_str(),
-                  Triple(p["std_dev_mm"], "%5.1f %5.1f %5.1f").c_str(),
-                  p["rays"].get<int>());
+    out += StringPrintf("   %-14s %-7s %s %s %4d\n",
+                        label.c_str(),
+                        p["kind"].get<std::string>().c_str(),
+                        Triple(p["xyz"], "%12.4f %12.4f %12.4f").c_str(),
+                        Triple(p["std_dev_mm"], "%5.1f %5.1f %5.1f").c_str(),
+                        p["rays"].get<int>());
   }
   out += Rule('=');
   return out;
@@ -962,7 +964,7 @@ AdjustmentOutputs MakeAdjustmentOutputs(const AdjustmentInput& input,
   }
   outputs.text = Printout(report);
   for (const Json& c : colmap) {
-    outputs.text += Printf(
+    outputs.text += StringPrintf(
         " camera %u written to the COLMAP model as %s: fit RMS %.4f px, max "
         "%.4f px (what FULL_OPENCV cannot express, e.g. shear)\n",
         c["camera_id"].get<unsigned>(),

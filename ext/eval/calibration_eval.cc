@@ -173,4 +173,25 @@ std::string CalibrationTable(const CalibrationEvaluation& evaluation) {
   return table;
 }
 
+nlohmann::ordered_json CalibrationEvaluationJson(
+    const CalibrationEvaluation& e) {
+  nlohmann::ordered_json json = {{"camera_id", e.camera_id},
+                                 {"model", e.model},
+                                 {"truth_model", e.truth_model},
+                                 {"max_abs_error_over_sigma", e.max_abs_ratio}};
+  json["parameters"] = nlohmann::ordered_json::array();
+  for (const ParameterError& p : e.parameters) {
+    nlohmann::ordered_json row = {{"name", p.name},
+                                  {"estimate", p.estimate},
+                                  {"truth", p.truth},
+                                  {"error", p.error}};
+    if (p.sigma > 0) {
+      row["sigma"] = p.sigma;
+      row["error_over_sigma"] = p.ratio;
+    }
+    json["parameters"].push_back(row);
+  }
+  return json;
+}
+
 }  // namespace bayon

@@ -16,6 +16,8 @@
 
 #include "ext/colmap/calibration_json.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -50,5 +52,9 @@ std::vector<CalibrationEvaluation> EvaluateCalibrations(
 
 // A table: one line per parameter.
 std::string CalibrationTable(const CalibrationEvaluation& evaluation);
+
+// One camera's evaluation as `bayon evaluate` reports it.
+nlohmann::ordered_json CalibrationEvaluationJson(
+    const CalibrationEvaluation& e);
 
 }  // namespace bayon

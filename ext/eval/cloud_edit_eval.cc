@@ -126,4 +126,18 @@ CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
   return evaluation;
 }
 
+nlohmann::ordered_json CloudEditEvaluationJson(const CloudEditEvaluation& e) {
+  return {{"num_blunders", e.num_blunders_before},
+          {"blunders_removed", e.BlundersRemovedFraction()},
+          {"num_good", e.num_good_before},
+          {"good_removed", e.GoodRemovedFraction()},
+          {"off_surface_m", e.off_surface_m},
+          {"num_off_surface", e.num_off_surface_before},
+          {"off_surface_removed", e.OffSurfaceRemovedFraction()},
+          {"on_surface_removed", e.OnSurfaceRemovedFraction()},
+          {"rms_good_before_m", e.good_before.rms},
+          {"rms_kept_m", e.kept_after.rms},
+          {"rms_good_kept_m", e.good_after.rms}};
+}
+
 }  // namespace bayon

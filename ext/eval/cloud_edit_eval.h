@@ -15,6 +15,8 @@
 #include "ext/core/point_cloud.h"
 #include "ext/eval/mesh_distance.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 
 namespace bayon {
@@ -51,5 +53,8 @@ CloudEditEvaluation EvaluateCloudEdit(const PointCloud& before,
                                       const MeshDistance& truth,
                                       double off_surface_m = 0,
                                       int num_threads = -1);
+
+// The evaluation as `bayon evaluate` reports it ("edit").
+nlohmann::ordered_json CloudEditEvaluationJson(const CloudEditEvaluation& e);
 
 }  // namespace bayon

@@ -301,4 +301,13 @@ MeshComparison CompareMeshes(const TriangleMesh& mesh,
   return comparison;
 }
 
+nlohmann::ordered_json DistanceStatisticsJson(const DistanceStatistics& s) {
+  return {{"count", s.count},
+          {"mean", s.mean},
+          {"rms", s.rms},
+          {"median", s.median},
+          {"p95", s.p95},
+          {"max", s.max}};
+}
+
 }  // namespace bayon

@@ -14,6 +14,7 @@
 #include "ext/core/point_cloud.h"
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <memory>
@@ -84,5 +85,8 @@ struct MeshComparison {
 MeshComparison CompareMeshes(const TriangleMesh& mesh,
                              const TriangleMesh& truth,
                              const MeshComparisonOptions& options = {});
+
+// {"count", "mean", "rms", "median", "p95", "max"}, as the reports give them.
+nlohmann::ordered_json DistanceStatisticsJson(const DistanceStatistics& s);
 
 }  // namespace bayon

@@ -173,4 +173,34 @@ std::string RelativeEvaluationTable(const std::string& label,
   return table + line;
 }
 
+nlohmann::ordered_json RelativeEvaluationJson(const RelativeEvaluation& e) {
+  nlohmann::ordered_json json = {
+      {"num_pairs", e.num_pairs},
+      {"num_oriented", e.num_oriented},
+      {"median_rotation_error_deg", e.median_rotation_error_deg},
+      {"max_rotation_error_deg", e.max_rotation_error_deg},
+      {"max_base_error_deg", e.max_base_error_deg},
+      {"max_rotation_ratio", e.max_rotation_ratio},
+      {"max_base_ratio", e.max_base_ratio},
+      {"pairs", nlohmann::ordered_json::array()}};
+  for (const PairEvaluation& pair : e.pairs) {
+    nlohmann::ordered_json p = {{"image1", pair.name1},
+                                {"image2", pair.name2},
+                                {"oriented", pair.oriented}};
+    if (pair.oriented) {
+      p["num_matches"] = pair.num_matches;
+      p["num_inliers"] = pair.num_inliers;
+      p["sigma0_px"] = pair.sigma0_px;
+      p["rotation_error_deg"] = pair.rotation_error_deg;
+      p["std_rotation_deg"] = pair.std_rotation_deg;
+      p["base_error_deg"] = pair.base_error_deg;
+      p["std_base_deg"] = pair.std_base_deg;
+    } else {
+      p["reason"] = pair.reason;
+    }
+    json["pairs"].push_back(p);
+  }
+  return json;
+}
+
 }  // namespace bayon

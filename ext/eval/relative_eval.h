@@ -10,6 +10,8 @@
 #include "ext/colmap/database.h"
 #include "ext/core/scene.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -58,5 +60,8 @@ RelativeEvaluation EvaluateRelativeOrientations(
 // One line per pair and a summary line, for the terminal.
 std::string RelativeEvaluationTable(const std::string& label,
                                     const RelativeEvaluation& evaluation);
+
+// The evaluation as `bayon evaluate` reports it ("relative").
+nlohmann::ordered_json RelativeEvaluationJson(const RelativeEvaluation& e);
 
 }  // namespace bayon

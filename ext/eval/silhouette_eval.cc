@@ -179,4 +179,22 @@ std::string SilhouetteTable(const SilhouetteEvaluation& evaluation) {
   return table;
 }
 
+nlohmann::ordered_json SilhouetteEvaluationJson(
+    const SilhouetteEvaluation& e, const SilhouetteOptions& options) {
+  nlohmann::ordered_json json = {{"threshold", options.grey_threshold},
+                                 {"mean_iou", e.mean_iou},
+                                 {"min_iou", e.min_iou},
+                                 {"mean_best_iou", e.mean_best_iou},
+                                 {"worst", e.worst},
+                                 {"views", nlohmann::ordered_json::array()}};
+  for (const SilhouetteView& v : e.views) {
+    json["views"].push_back({{"name", v.name},
+                             {"iou", v.iou},
+                             {"model_only", v.model_only},
+                             {"photograph_only", v.photograph_only},
+                             {"best_iou", v.best_iou}});
+  }
+  return json;
+}
+
 }  // namespace bayon

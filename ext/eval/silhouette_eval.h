@@ -17,6 +17,8 @@
 #include "ext/core/point_cloud.h"
 #include "ext/core/scene.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -65,5 +67,10 @@ SilhouetteEvaluation EvaluateSilhouettes(const TriangleMesh& mesh,
 
 // The per-view table and the mean and worst, for the console.
 std::string SilhouetteTable(const SilhouetteEvaluation& evaluation);
+
+// The evaluation as `bayon evaluate` reports it ("silhouettes"), with the
+// grey threshold it used.
+nlohmann::ordered_json SilhouetteEvaluationJson(
+    const SilhouetteEvaluation& e, const SilhouetteOptions& options);
 
 }  // namespace bayon

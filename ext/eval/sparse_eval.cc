@@ -3,6 +3,7 @@
 
 #include "ext/core/alignment.h"
 #include "ext/core/errors.h"
+#include "ext/core/string_printf.h"
 
 #include <cmath>
 #include <map>
@@ -98,6 +99,58 @@ SparseEvaluation EvaluateSparse(const Scene& model,
     }
   }
   return evaluation;
+}
+
+nlohmann::ordered_json SparseEvaluationJson(const SparseEvaluation& e) {
+  nlohmann::ordered_json json;
+  json["num_truth_images"] = e.num_truth_images;
+  json["num_registered"] = e.num_registered;
+  json["num_model_points"] = e.num_model_points;
+  json["similarity"] = {{"scale", e.truth_from_model.scale},
+                        {"qvec",
+                         {e.truth_from_model.rotation.w(),
+                          e.truth_from_model.rotation.x(),
+                          e.truth_from_model.rotation.y(),
+                          e.truth_from_model.rotation.z()}},
+                        {"tvec",
+                         {e.truth_from_model.translation.x(),
+                          e.truth_from_model.translation.y(),
+                          e.truth_from_model.translation.z()}}};
+  json["mean_camera_distance"] = e.mean_camera_distance;
+  json["center_rms"] = e.center_rms;
+  json["center_max"] = e.center_max;
+  json["center_rms_relative"] = e.center_rms_relative;
+  json["center_max_relative"] = e.center_max_relative;
+  json["rotation_rms_deg"] = e.rotation_rms_deg;
+  json["rotation_max_deg"] = e.rotation_max_deg;
+  json["images"] = nlohmann::ordered_json::array();
+  for (const ImageEvaluation& image : e.images) {
+    json["images"].push_back(
+        {{"name", image.name},
+         {"registered", image.registered},
+         {"center_error", image.center_error},
+         {"rotation_error_deg", image.rotation_error_deg}});
+  }
+  return json;
+}
+
+std::string SparseEvaluationTable(const std::string& label,
+                                  const SparseEvaluation& e) {
+  return StringPrintf("%-28s %10s %12s %12s %12s %12s\n",
+                      "model",
+                      "registered",
+                      "centre RMS",
+                      "centre max",
+                      "centre RMS %",
+                      "rot RMS deg") +
+         StringPrintf("%-28s %6d/%-3d %12.6g %12.6g %12.5f %12.5f\n",
+                      label.c_str(),
+                      e.num_registered,
+                      e.num_truth_images,
+                      e.center_rms,
+                      e.center_max,
+                      100.0 * e.center_rms_relative,
+                      e.rotation_rms_deg);
 }
 
 }  // namespace bayon

@@ -9,6 +9,8 @@
 #include "ext/core/scene.h"
 #include "ext/core/sim3.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -48,5 +50,12 @@ struct SparseEvaluation {
 SparseEvaluation EvaluateSparse(const Scene& model,
                                 const Scene& truth,
                                 const SparseEvaluationOptions& options = {});
+
+// The evaluation as `bayon evaluate` reports it ("sparse").
+nlohmann::ordered_json SparseEvaluationJson(const SparseEvaluation& e);
+
+// Its one-line table: registered images, centre and rotation errors.
+std::string SparseEvaluationTable(const std::string& label,
+                                  const SparseEvaluation& e);
 
 }  // namespace bayon

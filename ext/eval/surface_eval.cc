@@ -3,6 +3,7 @@
 
 #include "ext/core/errors.h"
 #include "ext/core/parallel.h"
+#include "ext/core/string_printf.h"
 #include "ext/render/mesh_renderer.h"
 
 #include <algorithm>
@@ -341,6 +342,65 @@ std::string SurfaceTableRow(const std::string& label,
     row += line;
   }
   return row;
+}
+
+namespace {
+
+nlohmann::ordered_json MeshTopologyJson(const MeshTopology& t) {
+  return {{"vertices", t.num_vertices},
+          {"faces", t.num_faces},
+          {"boundary_loops", t.num_boundary_loops},
+          {"non_manifold_edges", t.num_non_manifold_edges},
+          {"non_manifold_vertices", t.num_non_manifold_vertices},
+          {"components", t.num_components},
+          {"manifold", t.IsManifold()},
+          {"closed", t.IsClosed()}};
+}
+
+}  // namespace
+
+nlohmann::ordered_json SurfaceEvaluationJson(const SurfaceEvaluation& e) {
+  nlohmann::ordered_json json = {
+      {"num_points", e.num_points},
+      {"num_points_outside_region", e.num_points_outside_region},
+      {"accuracy_m", DistanceStatisticsJson(e.accuracy)},
+      {"completeness_m", DistanceStatisticsJson(e.completeness)},
+      {"completeness_fraction", e.completeness_fraction},
+      {"completeness_threshold_m", e.completeness_threshold_m},
+      {"num_visible_true_samples", e.num_visible_samples}};
+  nlohmann::ordered_json by_orientation = nlohmann::ordered_json::object();
+  for (int o = 0; o < kNumSurfaceOrientations; ++o) {
+    const OrientationCompleteness& c = e.completeness_by_orientation[o];
+    by_orientation[SurfaceOrientationName(static_cast<SurfaceOrientation>(o))] =
+        {{"num_visible_true_samples", c.num_samples},
+         {"completeness_fraction", c.fraction}};
+  }
+  json["completeness_by_orientation"] = by_orientation;
+  if (e.gsd_m > 0) {
+    json["gsd_m"] = e.gsd_m;
+    json["accuracy_gsd"] = {{"mean", e.accuracy.mean / e.gsd_m},
+                            {"rms", e.accuracy.rms / e.gsd_m},
+                            {"median", e.accuracy.median / e.gsd_m},
+                            {"p95", e.accuracy.p95 / e.gsd_m}};
+  }
+  if (e.is_mesh) {
+    json["topology"] = MeshTopologyJson(e.topology);
+    json["truth_topology"] = MeshTopologyJson(e.truth_topology);
+  }
+  return json;
+}
+
+std::string MeshTopologyLine(const std::string& label, const MeshTopology& t) {
+  return StringPrintf(
+      "  %-6s %zu faces, %zu boundary loops, %zu non-manifold edges, "
+      "%zu non-manifold vertices: %s\n",
+      label.c_str(),
+      t.num_faces,
+      t.num_boundary_loops,
+      t.num_non_manifold_edges,
+      t.num_non_manifold_vertices,
+      t.IsClosed() ? "closed"
+                   : (t.IsManifold() ? "manifold, open" : "not manifold"));
 }
 
 }  // namespace bayon

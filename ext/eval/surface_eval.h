@@ -22,6 +22,7 @@
 #include "ext/eval/mesh_distance.h"
 
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <string>
@@ -127,5 +128,12 @@ SurfaceEvaluation EvaluateMesh(const TriangleMesh& mesh,
 std::string SurfaceTableHeader();
 std::string SurfaceTableRow(const std::string& label,
                             const SurfaceEvaluation& evaluation);
+
+// The evaluation as `bayon evaluate` reports it ("cloud", "mesh"): with
+// accuracy in GSDs where the GSD is known, and a mesh's topology.
+nlohmann::ordered_json SurfaceEvaluationJson(const SurfaceEvaluation& e);
+
+// "  mesh   49612 faces, 0 boundary loops, ...: closed", one line.
+std::string MeshTopologyLine(const std::string& label, const MeshTopology& t);
 
 }  // namespace bayon

@@ -229,4 +229,22 @@ std::string TextureTable(const TextureEvaluation& evaluation) {
   return table;
 }
 
+nlohmann::ordered_json TextureEvaluationJson(const TextureEvaluation& e) {
+  nlohmann::ordered_json json = {
+      {"mean_psnr_db", e.mean_psnr_db},
+      {"mean_ssim", e.mean_ssim},
+      {"mean_normalized_psnr_db", e.mean_normalized_psnr_db},
+      {"mean_normalized_ssim", e.mean_normalized_ssim}};
+  json["views"] = nlohmann::ordered_json::array();
+  for (const ViewComparison& v : e.views) {
+    json["views"].push_back({{"name", v.name},
+                             {"pixels", v.raw.num_pixels},
+                             {"psnr_db", v.raw.psnr_db},
+                             {"ssim", v.raw.ssim},
+                             {"normalized_psnr_db", v.normalized.psnr_db},
+                             {"normalized_ssim", v.normalized.ssim}});
+  }
+  return json;
+}
+
 }  // namespace bayon

@@ -18,6 +18,7 @@
 #include "ext/core/scene.h"
 #include "ext/eval/image_metrics.h"
 
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include <string>
@@ -73,5 +74,8 @@ TextureEvaluation EvaluateAgainstPhotographs(
     const TextureEvaluationOptions& options);
 
 std::string TextureTable(const TextureEvaluation& evaluation);
+
+// The evaluation as `bayon evaluate` reports it: the means and each view.
+nlohmann::ordered_json TextureEvaluationJson(const TextureEvaluation& e);
 
 }  // namespace bayon
