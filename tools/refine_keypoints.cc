@@ -11,84 +11,6 @@
 
 namespace bayon {
 
-namespace {
-
-using Json = nlohmann::ordered_json;
-
-Json SummaryToJson(const KeypointRefinementSummary& summary,
-                   const std::string& database_path,
-                   const std::string& output_path) {
-  Json json;
-  json["database_path"] = database_path;
-  json["output_path"] = output_path;
-  json["match_source"] = summary.match_source;
-  json["num_pairs"] = summary.num_pairs;
-  json["num_tracks"] = summary.num_tracks;
-  json["num_observations"] = summary.num_observations;
-  json["num_reference"] = summary.num_reference;
-  json["num_refined"] = summary.num_refined;
-  json["num_rejected"] = summary.num_rejected;
-  json["median_shift_px"] = summary.median_shift_px;
-  json["mean_shift_px"] = summary.mean_shift_px;
-  Json outcomes = Json::object();
-  for (int i = 0; i < kNumObservationOutcomes; ++i) {
-    outcomes[ObservationOutcomeName(static_cast<ObservationOutcome>(i))] =
-        summary.num_by_outcome[i];
-  }
-  json["outcomes"] = outcomes;
-  json["images"] = Json::array();
-  for (const ImageRefinementReport& image : summary.images) {
-    json["images"].push_back({{"image_id", image.image_id},
-                              {"name", image.name},
-                              {"num_keypoints", image.num_keypoints},
-                              {"num_observations", image.num_observations},
-                              {"num_reference", image.num_reference},
-                              {"num_refined", image.num_refined},
-                              {"num_rejected", image.num_rejected},
-                              {"median_shift_px", image.median_shift_px}});
-  }
-  json["seconds"] = {{"read", summary.read_seconds},
-                     {"refine", summary.refine_seconds},
-                     {"write", summary.write_seconds},
-                     {"total", summary.seconds}};
-  return json;
-}
-
-void PrintImageTable(const KeypointRefinementSummary& summary) {
-  std::printf("%-28s %9s %9s %9s %9s %9s %12s\n",
-              "image",
-              "keypoints",
-              "in tracks",
-              "reference",
-              "refined",
-              "rejected",
-              "median shift");
-  for (const ImageRefinementReport& image : summary.images) {
-    std::printf("%-28s %9d %9d %9d %9d %9d %9.3f px\n",
-                image.name.c_str(),
-                image.num_keypoints,
-                image.num_observations,
-                image.num_reference,
-                image.num_refined,
-                image.num_rejected,
-                image.median_shift_px);
-  }
-  std::string rejections;
-  for (int i = 0; i < kNumObservationOutcomes; ++i) {
-    const auto outcome = static_cast<ObservationOutcome>(i);
-    if (!IsRejection(outcome) || summary.num_by_outcome[i] == 0) continue;
-    rejections += StrCat(rejections.empty() ? "" : ", ",
-                         ObservationOutcomeName(outcome),
-                         " ",
-                         summary.num_by_outcome[i]);
-  }
-  std::printf("rejected: %s\n",
-              rejections.empty() ? "none" : rejections.c_str());
-  std::fflush(stdout);
-}
-
-}  // namespace
-
 int RunRefineKeypoints(int argc, char** argv) {
   std::string database_path, image_path, output_path, report_path, log_path;
   bool overwrite = false;
@@ -167,9 +89,12 @@ int RunRefineKeypoints(int argc, char** argv) {
   if (!report_path.empty()) {
     WriteFileAtomically(
         report_path,
-        SummaryToJson(summary, database_path, output_path).dump(2) + "\n");
+        KeypointRefinementSummaryJson(summary, database_path, output_path)
+                .dump(2) +
+            "\n");
   }
-  PrintImageTable(summary);
+  std::printf("%s", KeypointRefinementTable(summary).c_str());
+  std::fflush(stdout);
   command.PrintSummary(StrCat(summary.num_refined,
                               " of ",
                               summary.num_observations - summary.num_reference,

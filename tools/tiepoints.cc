@@ -11,95 +11,6 @@
 
 namespace bayon {
 
-namespace {
-
-using Json = nlohmann::ordered_json;
-
-Json SummaryToJson(const TiePointSummary& summary) {
-  Json json;
-  json["num_surfaces"] = summary.num_surfaces;
-  json["num_candidates"] = summary.num_candidates;
-  json["num_followed"] = summary.num_followed;
-  json["num_points"] = summary.num_points;
-  json["num_manual_points"] = summary.num_manual_points;
-  json["num_target_points"] = summary.num_target_points;
-  json["num_observations"] = summary.num_observations;
-  json["mean_images_per_point"] = summary.mean_images_per_point;
-  json["points_by_images"] = summary.points_by_images;
-  json["median_sigma_px"] = summary.median_sigma_px;
-  Json links = Json::object();
-  for (int i = 0; i < kNumTieLinkOutcomes; ++i) {
-    links[TieLinkOutcomeName(static_cast<TieLinkOutcome>(i))] =
-        summary.num_by_link[i];
-  }
-  json["links"] = links;
-  Json lsm = Json::object();
-  for (int i = 0; i < kNumObservationOutcomes; ++i) {
-    if (summary.num_by_lsm[i] == 0) continue;
-    lsm[ObservationOutcomeName(static_cast<ObservationOutcome>(i))] =
-        summary.num_by_lsm[i];
-  }
-  json["lsm_rejections"] = lsm;
-  json["images"] = Json::array();
-  for (const TieImageReport& image : summary.images) {
-    json["images"].push_back({{"image_id", image.image_id},
-                              {"name", image.name},
-                              {"num_keypoints", image.num_keypoints},
-                              {"num_candidates", image.num_candidates},
-                              {"num_references", image.num_references},
-                              {"num_observations", image.num_observations}});
-  }
-  json["colmap_pairs"] = summary.colmap_pairs;
-  json["seconds"] = summary.seconds;
-  return json;
-}
-
-void PrintTables(const TiePointSummary& summary) {
-  std::printf("%-28s %9s %10s %10s %12s\n",
-              "image",
-              "keypoints",
-              "candidates",
-              "references",
-              "observations");
-  for (const TieImageReport& image : summary.images) {
-    std::printf("%-28s %9d %10d %10d %12d\n",
-                image.name.c_str(),
-                image.num_keypoints,
-                image.num_candidates,
-                image.num_references,
-                image.num_observations);
-  }
-  std::string histogram;
-  for (size_t n = 2; n < summary.points_by_images.size(); ++n) {
-    if (summary.points_by_images[n] == 0) continue;
-    histogram += StrCat(
-        histogram.empty() ? "" : ", ", summary.points_by_images[n], " in ", n);
-  }
-  std::printf("points by images: %s\n",
-              histogram.empty() ? "none" : histogram.c_str());
-  std::string links;
-  for (int i = 0; i < kNumTieLinkOutcomes; ++i) {
-    links += StrCat(links.empty() ? "" : ", ",
-                    TieLinkOutcomeName(static_cast<TieLinkOutcome>(i)),
-                    " ",
-                    summary.num_by_link[i]);
-  }
-  std::printf("links: %s\n", links.c_str());
-  std::string lsm;
-  for (int i = 0; i < kNumObservationOutcomes; ++i) {
-    if (summary.num_by_lsm[i] == 0) continue;
-    lsm += StrCat(lsm.empty() ? "" : ", ",
-                  ObservationOutcomeName(static_cast<ObservationOutcome>(i)),
-                  " ",
-                  summary.num_by_lsm[i]);
-  }
-  std::printf("least-squares rejections: %s\n",
-              lsm.empty() ? "none" : lsm.c_str());
-  std::fflush(stdout);
-}
-
-}  // namespace
-
 int RunTiePoints(int argc, char** argv) {
   std::string database_path, image_path, colmap_output_path, report_path,
       log_path;
@@ -206,9 +117,11 @@ int RunTiePoints(int argc, char** argv) {
   const TiePointSummary summary = FindTiePoints(
       database_path, image_path, colmap_output_path, overwrite, options);
   if (!report_path.empty()) {
-    WriteFileAtomically(report_path, SummaryToJson(summary).dump(2) + "\n");
+    WriteFileAtomically(report_path,
+                        TiePointSummaryJson(summary).dump(2) + "\n");
   }
-  PrintTables(summary);
+  std::printf("%s", TiePointTables(summary).c_str());
+  std::fflush(stdout);
   int num_three = 0;
   for (size_t n = 3; n < summary.points_by_images.size(); ++n) {
     num_three += summary.points_by_images[n];

@@ -8,6 +8,7 @@
 #include "ext/core/progress.h"
 
 #include <glog/logging.h>
+#include <nlohmann/json.hpp>
 #include <pcl/filters/radius_outlier_removal.h>
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/kdtree/kdtree_flann.h>
@@ -845,6 +846,47 @@ PointCloud EditPointCloud(const PointCloud& cloud,
   report->num_removed = cloud.size() - edited.size();
   report->seconds = timer.Seconds();
   return edited;
+}
+
+nlohmann::ordered_json CloudEditReportJson(const CloudEditReport& report,
+                                           const std::string& input_path) {
+  nlohmann::ordered_json json;
+  json["input_path"] = input_path;
+  json["method"] = CloudEditMethodName(report.method);
+  json["num_input"] = report.num_input;
+  json["num_kept"] = report.num_kept;
+  json["num_removed"] = report.num_removed;
+  json["used_point_precision"] = report.used_point_precision;
+  json["added_sigma_m"] = report.added_sigma_m;
+  json["converged"] = report.converged;
+  if (report.method == CloudEditMethod::kRadius) {
+    json["radius_m"] = report.radius_m;
+  }
+  json["seconds"] = report.seconds;
+  nlohmann::ordered_json reasons = nlohmann::ordered_json::object();
+  const std::vector<size_t> counts = report.CountByReason();
+  for (int r = 1; r < kNumEditReasons; ++r) {
+    if (counts[r] > 0) {
+      reasons[EditReasonName(static_cast<EditReason>(r))] = counts[r];
+    }
+  }
+  json["removed_by_reason"] = reasons;
+  json["iterations"] = nlohmann::ordered_json::array();
+  for (const EditIterationReport& it : report.iterations) {
+    json["iterations"].push_back(
+        {{"iteration", it.iteration},
+         {"num_tested", it.num_tested},
+         {"num_untested", it.num_untested},
+         {"num_flagged", it.num_flagged},
+         {"num_newly_flagged", it.num_newly_flagged},
+         {"num_restored", it.num_restored},
+         {"num_sigma", it.num_sigma},
+         {"num_absolute", it.num_absolute},
+         {"num_close", it.num_close},
+         {"median_normalized_deviation", it.median_normalized_deviation},
+         {"seconds", it.seconds}});
+  }
+  return json;
 }
 
 }  // namespace bayon

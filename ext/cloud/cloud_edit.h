@@ -30,6 +30,8 @@
 
 #include "ext/core/point_cloud.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -195,5 +197,9 @@ double MedianPointSpacing(const PointCloud& cloud);
 void CheckCloudSpansSurface(const PointCloud& cloud,
                             size_t min_points,
                             const std::string& what);
+
+// The report `bayon edit` writes beside the edited cloud (edit.json).
+nlohmann::ordered_json CloudEditReportJson(const CloudEditReport& report,
+                                           const std::string& input_path);
 
 }  // namespace bayon

@@ -11,6 +11,7 @@
 #include "ext/image/image_io.h"
 
 #include <Eigen/Eigenvalues>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -1485,6 +1486,46 @@ cv::Mat RejectMap(const DenseMasterReport& master, const cv::Mat& color) {
     y += line;
   }
   return picture;
+}
+
+nlohmann::ordered_json DenseReportJson(const DenseReport& report,
+                                       const DenseOptions& options) {
+  nlohmann::ordered_json json;
+  json["num_points"] = report.num_points;
+  json["num_cells"] = report.num_cells;
+  json["seconds"] = report.seconds;
+  json["cells_per_second"] = report.CellsPerSecond();
+  json["points_per_second"] = report.PointsPerSecond();
+  json["mode"] = options.mode == DenseMode::kPaper ? "paper" : "multiview";
+  json["added_sigma"] = report.added_sigma;
+  if (options.mode == DenseMode::kPaper) {
+    json["cell_size"] = options.cell_size;
+  } else {
+    json["propagation_seconds"] = report.propagation_seconds;
+    json["fusion_seconds"] = report.fusion_seconds;
+    json["mpgc_seconds"] = report.mpgc_seconds;
+  }
+  json["masters"] = nlohmann::ordered_json::array();
+  for (const DenseMasterReport& master : report.masters) {
+    nlohmann::ordered_json entry;
+    entry["image_id"] = master.master;
+    entry["name"] = master.name;
+    entry["search_image_ids"] = master.search;
+    if (!master.skipped.empty()) entry["skipped"] = master.skipped;
+    entry["min_depth"] = master.min_depth;
+    entry["max_depth"] = master.max_depth;
+    entry["num_cells"] = master.num_cells;
+    entry["num_points"] = master.num_points;
+    entry["median_sigma_gsd"] = master.median_sigma_gsd;
+    entry["seconds"] = master.seconds;
+    nlohmann::ordered_json rejects = nlohmann::ordered_json::object();
+    for (size_t r = 1; r < master.rejects.size(); ++r) {
+      rejects[DenseRejectName(static_cast<DenseReject>(r))] = master.rejects[r];
+    }
+    entry["rejected"] = rejects;
+    json["masters"].push_back(entry);
+  }
+  return json;
 }
 
 }  // namespace bayon

@@ -64,6 +64,8 @@
 #include "ext/dense/mpgc.h"
 #include "ext/dense/patch_match.h"
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <map>
 #include <string>
@@ -362,5 +364,10 @@ std::map<image_t, DenseImage> LoadDenseImages(
     const std::string& image_path,
     double highpass_sigma_px,
     std::map<image_t, std::string>* unreadable = nullptr);
+
+// The report `bayon dense` writes beside its cloud (points.json): the
+// rates, the time split and each master's cells and rejects.
+nlohmann::ordered_json DenseReportJson(const DenseReport& report,
+                                       const DenseOptions& options);
 
 }  // namespace bayon

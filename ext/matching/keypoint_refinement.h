@@ -46,6 +46,7 @@
 #include "ext/matching/lsm.h"
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include <array>
@@ -251,5 +252,14 @@ KeypointRefinementSummary RefineDatabaseKeypoints(
     const std::string& output_path,
     bool overwrite,
     const KeypointRefinementOptions& options);
+
+// The report `bayon refine_keypoints` writes.
+nlohmann::ordered_json KeypointRefinementSummaryJson(
+    const KeypointRefinementSummary& summary,
+    const std::string& database_path,
+    const std::string& output_path);
+
+// Its table per image and the rejections, as the command prints them.
+std::string KeypointRefinementTable(const KeypointRefinementSummary& summary);
 
 }  // namespace bayon

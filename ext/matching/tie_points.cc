@@ -9,12 +9,14 @@
 #include "ext/core/file_util.h"
 #include "ext/core/parallel.h"
 #include "ext/core/progress.h"
+#include "ext/core/string_printf.h"
 #include "ext/image/image_io.h"
 #include "ext/image/interpolation.h"
 #include "ext/orientation/disparity_surface.h"
 
 #include <Eigen/SVD>
 #include <glog/logging.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -872,6 +874,90 @@ int ExportTiePointsToColmap(const std::string& database_path,
     }
   });
   return static_cast<int>(pairs.size());
+}
+
+nlohmann::ordered_json TiePointSummaryJson(const TiePointSummary& summary) {
+  nlohmann::ordered_json json;
+  json["num_surfaces"] = summary.num_surfaces;
+  json["num_candidates"] = summary.num_candidates;
+  json["num_followed"] = summary.num_followed;
+  json["num_points"] = summary.num_points;
+  json["num_manual_points"] = summary.num_manual_points;
+  json["num_target_points"] = summary.num_target_points;
+  json["num_observations"] = summary.num_observations;
+  json["mean_images_per_point"] = summary.mean_images_per_point;
+  json["points_by_images"] = summary.points_by_images;
+  json["median_sigma_px"] = summary.median_sigma_px;
+  nlohmann::ordered_json links = nlohmann::ordered_json::object();
+  for (int i = 0; i < kNumTieLinkOutcomes; ++i) {
+    links[TieLinkOutcomeName(static_cast<TieLinkOutcome>(i))] =
+        summary.num_by_link[i];
+  }
+  json["links"] = links;
+  nlohmann::ordered_json lsm = nlohmann::ordered_json::object();
+  for (int i = 0; i < kNumObservationOutcomes; ++i) {
+    if (summary.num_by_lsm[i] == 0) continue;
+    lsm[ObservationOutcomeName(static_cast<ObservationOutcome>(i))] =
+        summary.num_by_lsm[i];
+  }
+  json["lsm_rejections"] = lsm;
+  json["images"] = nlohmann::ordered_json::array();
+  for (const TieImageReport& image : summary.images) {
+    json["images"].push_back({{"image_id", image.image_id},
+                              {"name", image.name},
+                              {"num_keypoints", image.num_keypoints},
+                              {"num_candidates", image.num_candidates},
+                              {"num_references", image.num_references},
+                              {"num_observations", image.num_observations}});
+  }
+  json["colmap_pairs"] = summary.colmap_pairs;
+  json["seconds"] = summary.seconds;
+  return json;
+}
+
+std::string TiePointTables(const TiePointSummary& summary) {
+  std::string text;
+  text += StringPrintf("%-28s %9s %10s %10s %12s\n",
+                       "image",
+                       "keypoints",
+                       "candidates",
+                       "references",
+                       "observations");
+  for (const TieImageReport& image : summary.images) {
+    text += StringPrintf("%-28s %9d %10d %10d %12d\n",
+                         image.name.c_str(),
+                         image.num_keypoints,
+                         image.num_candidates,
+                         image.num_references,
+                         image.num_observations);
+  }
+  std::string histogram;
+  for (size_t n = 2; n < summary.points_by_images.size(); ++n) {
+    if (summary.points_by_images[n] == 0) continue;
+    histogram += StrCat(
+        histogram.empty() ? "" : ", ", summary.points_by_images[n], " in ", n);
+  }
+  text += StringPrintf("points by images: %s\n",
+                       histogram.empty() ? "none" : histogram.c_str());
+  std::string links;
+  for (int i = 0; i < kNumTieLinkOutcomes; ++i) {
+    links += StrCat(links.empty() ? "" : ", ",
+                    TieLinkOutcomeName(static_cast<TieLinkOutcome>(i)),
+                    " ",
+                    summary.num_by_link[i]);
+  }
+  text += StringPrintf("links: %s\n", links.c_str());
+  std::string lsm;
+  for (int i = 0; i < kNumObservationOutcomes; ++i) {
+    if (summary.num_by_lsm[i] == 0) continue;
+    lsm += StrCat(lsm.empty() ? "" : ", ",
+                  ObservationOutcomeName(static_cast<ObservationOutcome>(i)),
+                  " ",
+                  summary.num_by_lsm[i]);
+  }
+  text += StringPrintf("least-squares rejections: %s\n",
+                       lsm.empty() ? "none" : lsm.c_str());
+  return text;
 }
 
 }  // namespace bayon

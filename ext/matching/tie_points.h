@@ -53,6 +53,8 @@
 #include "ext/core/types.h"
 #include "ext/matching/keypoint_refinement.h"
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <string>
 #include <vector>
@@ -196,5 +198,12 @@ int ExportTiePointsToColmap(const std::string& database_path,
                             const std::vector<TiePointRecord>& points,
                             const std::string& output_path,
                             bool overwrite);
+
+// The report `bayon tiepoints` writes.
+nlohmann::ordered_json TiePointSummaryJson(const TiePointSummary& summary);
+
+// Its tables per image, points by images, links and least-squares
+// rejections, as the command prints them.
+std::string TiePointTables(const TiePointSummary& summary);
 
 }  // namespace bayon

@@ -6,6 +6,7 @@
 #include "ext/core/progress.h"
 
 #include <glog/logging.h>
+#include <nlohmann/json.hpp>
 
 #include <iomanip>
 #include <map>
@@ -284,6 +285,66 @@ TriangleMesh MeshPointCloud(const PointCloud& input,
   }
   report->topology = ComputeMeshTopology(mesh);
   return mesh;
+}
+
+nlohmann::ordered_json MeshReportJson(const MeshReport& r,
+                                      const std::string& input_path,
+                                      const std::string& output_path) {
+  const MeshTopology& t = r.topology;
+  nlohmann::ordered_json json;
+  json["input_path"] = input_path;
+  json["output_path"] = output_path;
+  json["method"] = MeshMethodName(r.method);
+  json["num_input_points"] = r.num_input_points;
+  json["median_spacing"] = r.median_spacing;
+  json["normals_estimated"] = r.normals_estimated;
+  json["num_raw_faces"] = r.num_raw_faces;
+  json["num_vertices"] = t.num_vertices;
+  json["num_faces"] = t.num_faces;
+  json["num_edges"] = t.num_edges;
+  json["num_boundary_edges"] = t.num_boundary_edges;
+  json["num_boundary_loops"] = t.num_boundary_loops;
+  json["num_non_manifold_edges"] = t.num_non_manifold_edges;
+  json["num_non_manifold_vertices"] = t.num_non_manifold_vertices;
+  json["num_components"] = t.num_components;
+  json["euler_characteristic"] = t.euler_characteristic;
+  json["mean_edge"] = t.mean_edge;
+  json["longest_edge"] = t.longest_edge;
+  json["area"] = t.area;
+  if (r.method == MeshMethod::kCylinder) {
+    const CylinderMeshReport& c = r.cylinder;
+    json["cylinder"] = {
+        {"axis_point", {c.axis_point.x(), c.axis_point.y(), c.axis_point.z()}},
+        {"axis_direction",
+         {c.axis_direction.x(), c.axis_direction.y(), c.axis_direction.z()}},
+        {"mean_radius", c.mean_radius},
+        {"num_on_axis", c.num_on_axis},
+        {"num_duplicates", c.num_duplicates},
+        {"num_seam_copies", c.num_seam_copies},
+        {"num_plane_faces", c.num_faces_once},
+        {"num_seam_faces", c.num_seam_faces},
+        {"num_long_removed", c.num_long_removed},
+        {"num_degenerate_removed", c.num_degenerate_removed}};
+  }
+  if (r.method == MeshMethod::kPoisson) {
+    json["num_trimmed_faces"] = r.num_trimmed_faces;
+  }
+  const MeshCleanupReport& c = r.cleanup;
+  json["cleanup"] = {{"merged_vertices", c.num_merged_vertices},
+                     {"repeated_vertex_faces", c.num_repeated_vertex_faces},
+                     {"duplicate_faces", c.num_duplicate_faces},
+                     {"flipped_faces", c.num_flipped_faces},
+                     {"non_manifold_faces", c.num_non_manifold_faces},
+                     {"degenerate_faces", c.num_degenerate_faces},
+                     {"small_components", c.num_small_components},
+                     {"small_component_faces", c.num_small_component_faces},
+                     {"holes_filled", c.num_holes_filled},
+                     {"fill_faces", c.num_fill_faces},
+                     {"split_vertices", c.num_split_vertices}};
+  json["seconds"] = {{"normals", r.seconds_normals},
+                     {"method", r.seconds_method},
+                     {"cleanup", r.seconds_cleanup}};
+  return json;
 }
 
 }  // namespace bayon

@@ -39,6 +39,8 @@
 #include "ext/mesh/mesh_cleanup.h"
 #include "ext/mesh/normals.h"
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -224,5 +226,11 @@ TriangleMesh MeshPointCloud(const PointCloud& cloud,
                             const MeshOptions& options,
                             MeshReport* report,
                             const std::string& what = "point cloud");
+
+// The report `bayon mesh` writes beside the mesh: method, topology,
+// cleanup and times.
+nlohmann::ordered_json MeshReportJson(const MeshReport& r,
+                                      const std::string& input_path,
+                                      const std::string& output_path);
 
 }  // namespace bayon

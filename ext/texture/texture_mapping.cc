@@ -11,6 +11,7 @@
 #include "ext/render/mesh_renderer.h"
 
 #include <glog/logging.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -1038,6 +1039,62 @@ std::string TextureSummary(const TextureReport& r) {
              r.seconds_atlas
       << " s";
   return out.str();
+}
+
+nlohmann::ordered_json TextureReportJson(
+    const TextureReport& r,
+    const TextureOptions& options,
+    const std::string& mesh_path,
+    const std::vector<std::string>& files) {
+  nlohmann::ordered_json json;
+  json["mesh_path"] = mesh_path;
+  json["preprocess"] = TexturePreprocessName(options.preprocess);
+  json["filter_radius_px"] = options.filter_radius_px;
+  json["blend"] = TextureBlendName(options.blend);
+  json["num_images"] = r.num_images;
+  json["num_faces"] = r.num_faces;
+  json["num_unseen_faces"] = r.num_unseen_faces;
+  json["mean_views_per_face"] = r.mean_views_per_face;
+  json["num_charts"] = r.num_charts;
+  json["atlas_width"] = r.atlas_width;
+  json["atlas_height"] = r.atlas_height;
+  json["texel_size"] = r.texel_size;
+  json["atlas_fill"] = r.atlas_fill;
+  json["num_seam_edges"] = r.num_seam_edges;
+  json["seam_difference"] = r.seam_difference;
+  json["faces_per_image"] = r.faces_per_image;
+  json["seam_leveling"] = options.seam_leveling;
+  if (options.seam_leveling) {
+    json["seam_leveling_report"] = {
+        {"num_seam_edges", r.seam_leveling.num_seam_edges},
+        {"num_unknowns", r.seam_leveling.num_unknowns},
+        {"difference_before", r.seam_leveling.difference_before},
+        {"difference_after", r.seam_leveling.difference_after},
+        {"solver_iterations", r.seam_leveling.solver_iterations},
+        {"solver_error", r.seam_leveling.solver_error}};
+  }
+  if (options.preprocess == TexturePreprocess::kBalance) {
+    nlohmann::ordered_json balance = {
+        {"num_faces", r.balance.num_faces},
+        {"num_pairs", r.balance.num_pairs},
+        {"num_groups", r.balance.num_groups},
+        {"sigma_before", r.balance.sigma_before},
+        {"sigma_after", r.balance.sigma_after},
+        {"images", nlohmann::ordered_json::object()}};
+    for (const auto& [name, c] : r.corrections) {
+      balance["images"][name] = {
+          {"gain_bgr", {c.gain[0], c.gain[1], c.gain[2]}},
+          {"offset_bgr", {c.offset[0], c.offset[1], c.offset[2]}}};
+    }
+    json["balance"] = balance;
+  }
+  json["exclude_images"] = options.exclude_images;
+  json["seconds"] = {{"load", r.seconds_load},
+                     {"preprocess", r.seconds_preprocess},
+                     {"visibility", r.seconds_visibility},
+                     {"atlas", r.seconds_atlas}};
+  json["files"] = files;
+  return json;
 }
 
 }  // namespace bayon

@@ -56,6 +56,7 @@
 #include "ext/core/scene.h"
 #include "ext/texture/color_balance.h"
 
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include <map>
@@ -157,5 +158,12 @@ TexturedMesh MapTexture(const TriangleMesh& mesh,
                         const TextureOptions& options);
 
 std::string TextureSummary(const TextureReport& report);
+
+// texture.json: the options that shaped the atlas, its figures, the
+// balance and seam levelling applied, times and the files written.
+nlohmann::ordered_json TextureReportJson(const TextureReport& r,
+                                         const TextureOptions& options,
+                                         const std::string& mesh_path,
+                                         const std::vector<std::string>& files);
 
 }  // namespace bayon
