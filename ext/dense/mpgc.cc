@@ -452,6 +452,295 @@ std::vector<int> LocalMaxima(const std::vector<double>& score,
   return maxima;
 }
 
+// What one MPGC solution holds fixed: the master's patch, the search views
+// and the weights.
+struct MpgcProblem {
+  const MpgcView& master;
+  const Eigen::Vector2d& master_xy;
+  const std::vector<MpgcView>& search;
+  const LsmTemplate& patch;
+  double step;    // of the numerical derivatives, object units
+  double weight;  // of the geometric observations against the grey ones
+  const MpgcOptions& options;
+
+  bool Build(const Eigen::Vector3d& xyz,
+             std::vector<PatchState>* patches,
+             int* failed,
+             System* system) const {
+    return BuildSystem(master,
+                       master_xy,
+                       search,
+                       patch,
+                       xyz,
+                       step,
+                       weight,
+                       options,
+                       patches,
+                       failed,
+                       system);
+  }
+
+  // A patch moves by its centre's shift and by its shape's change at its
+  // corners, as lsm.h judges single patches.
+  bool SmallStep(const Eigen::VectorXd& delta, size_t num_patches) const {
+    for (size_t k = 0; k < num_patches; ++k) {
+      const LsmVector d =
+          delta.segment<kNumLsmParams>(3 + kNumLsmParams * static_cast<int>(k));
+      const double corners = options.lsm.patch_radius *
+                             (std::abs(d[kLsmA1]) + std::abs(d[kLsmA2]) +
+                              std::abs(d[kLsmB1]) + std::abs(d[kLsmB2]));
+      if (d.head<2>().norm() >= options.convergence_px ||
+          corners >= options.convergence_px) {
+        return false;
+      }
+    }
+    return true;
+  }
+};
+
+// The search patches at the approximation, each shaped as the plane of
+// `normal` (or the master's ray) induces; those that cannot be placed go
+// into `dropped`.
+std::vector<PatchState> PlacePatches(
+    const MpgcProblem& problem,
+    const Eigen::Vector3d& approximation,
+    const std::optional<MasterRays>& rays,
+    const std::optional<Eigen::Vector3d>& normal,
+    std::vector<int>* dropped) {
+  std::vector<PatchState> patches;
+  for (size_t j = 0; j < problem.search.size(); ++j) {
+    const MpgcView& view = problem.search[j];
+    PatchState state;
+    state.view = static_cast<int>(j);
+    Eigen::Matrix2d shape;
+    Eigen::Vector2d centre;
+    if (!Project(view, approximation, &centre) ||
+        (view.cam_from_world * approximation).z() <= 0 || !rays ||
+        !InducedShape(*rays, view, approximation, normal, &shape)) {
+      dropped->push_back(static_cast<int>(j));
+      continue;
+    }
+    state.start = LsmParameters::At(centre, shape);
+    state.params = state.start;
+    patches.push_back(state);
+  }
+  return patches;
+}
+
+// How one run of iterations over the current patches ended.
+struct MpgcIterations {
+  std::optional<MpgcStatus> failure;  // the whole match fails
+  bool built = false;                 // the last system was built
+  bool converged = false;
+  int drop = -2;  // a patch that failed or moved too far; -2: none
+  int iterations = 0;
+  System system;  // the last one built
+};
+
+// Gauss-Newton on xyz and the patches from where they are, until the step
+// is small, a patch fails or wanders, or max_iterations.
+//
+// Step control as lsm.h's: where a step makes the sum of squares grow (the
+// period-two oscillation that resampling can drive), half of it is taken
+// from where it started instead; a halved step that is small ends the
+// iteration as a converged one does, and so does a third failure (at the
+// step's start) or a step that barely lowers the sum (convergence_sigma).
+// One system per iteration. On the rendered tower the two endings took the
+// mean number of iterations per point from 21 to 15 at the same accuracy;
+// halving until small had spent a third of them.
+MpgcIterations Iterate(const MpgcProblem& problem,
+                       Eigen::Vector3d* xyz,
+                       std::vector<PatchState>* patches) {
+  const MpgcOptions& options = problem.options;
+  MpgcIterations out;
+  System& system = out.system;
+  int failed = -2;
+  out.built = problem.Build(*xyz, patches, &failed, &system);
+  Eigen::Vector3d step_xyz = *xyz;
+  std::vector<PatchState> step_patches;
+  System step_system;
+  double step_cost = std::numeric_limits<double>::infinity();
+  int halvings = 0;
+  Eigen::VectorXd delta;
+  const auto take = [&](const Eigen::VectorXd& step) {
+    *xyz = step_xyz + step.head<3>();
+    for (size_t k = 0; k < patches->size(); ++k) {
+      (*patches)[k].params = step_patches[k].params;
+      (*patches)[k].params.Add(
+          step.segment<kNumLsmParams>(3 + kNumLsmParams * static_cast<int>(k)));
+    }
+    failed = -2;
+    out.built = problem.Build(*xyz, patches, &failed, &system);
+  };
+  int& iteration = out.iterations;
+  for (; iteration < options.max_iterations; ++iteration) {
+    if (!out.built) {
+      if (failed == -1) {
+        out.failure = MpgcStatus::kOutsideImage;
+        return out;
+      }
+      out.drop = failed;
+      break;
+    }
+    if (system.cost > step_cost) {
+      if (halvings == kMaxStepHalvings) {
+        // Neither the step nor its halves lower the sum of squares: the
+        // step's start is its least, as near the minimum as the
+        // linearisation can tell (the interpolated gradients are not
+        // exactly the derivatives of the interpolated values, so the
+        // Gauss-Newton step does not vanish there).
+        *xyz = step_xyz;
+        *patches = std::move(step_patches);
+        system = std::move(step_system);
+        out.built = true;
+        out.converged = true;
+        ++iteration;
+        break;
+      }
+      ++halvings;
+      delta *= 0.5;
+      take(delta);
+      if (problem.SmallStep(delta, patches->size())) {
+        out.converged = out.built;
+        ++iteration;
+        break;
+      }
+      continue;
+    }
+    if (step_cost - system.cost < options.convergence_sigma *
+                                      options.convergence_sigma * system.cost /
+                                      system.num_observations) {
+      // The step lowered the sum of squares by less than (k sigma0)^2
+      // (sigma0^2 as v'Pv over the observations, which outnumber the
+      // unknowns more than tenfold): it moved the solution by less than k of
+      // its standard deviations (v'Pv falls by dx' N dx, and sigma0^2 N^-1 is
+      // dx's covariance).
+      out.converged = true;
+      ++iteration;
+      break;
+    }
+    halvings = 0;
+    step_xyz = *xyz;
+    step_patches = *patches;
+    step_system = system;
+    step_cost = system.cost;
+    if (!SolveSystem(system, &delta)) {
+      out.failure = MpgcStatus::kSingular;
+      return out;
+    }
+    take(delta);
+    // Patches that wandered off their approximation show something else.
+    double worst = options.max_shift_px;
+    for (size_t k = 0; k < patches->size(); ++k) {
+      const PatchState& state = (*patches)[k];
+      const double moved =
+          (state.params.Position() - state.start.Position()).norm();
+      if (moved > worst) {
+        worst = moved;
+        out.drop = static_cast<int>(k);
+      }
+    }
+    if (out.drop >= 0) break;
+    if (problem.SmallStep(delta, patches->size())) {
+      out.converged = out.built;
+      ++iteration;
+      break;
+    }
+  }
+  return out;
+}
+
+// The patch whose correlation with the template is lowest, if below
+// `below`; -2: none.
+int LeastCorrelated(const std::vector<PatchState>& patches, double below) {
+  int least = -2;
+  double lowest = below;
+  for (size_t k = 0; k < patches.size(); ++k) {
+    const double r = patches[k].equations.Correlation();
+    if (r < lowest) {
+      lowest = r;
+      least = static_cast<int>(k);
+    }
+  }
+  return least;
+}
+
+// sigma0, the point's covariance and the patches' positions at the
+// converged solution, into `result`.
+void ConcludeMpgc(const MpgcProblem& problem,
+                  const std::vector<PatchState>& patches,
+                  const Eigen::Vector3d& xyz,
+                  const System& system,
+                  MpgcResult* result) {
+  const MpgcOptions& options = problem.options;
+  int unknowns = 3;
+  double noise_kept = 0, r1_sq = 0;
+  int samples = 0;
+  for (const PatchState& state : patches) {
+    for (bool a : state.active) unknowns += a;
+    noise_kept += state.equations.noise_gain_sum;
+    samples += state.equations.num_observations;
+    r1_sq += state.params.r1 * state.params.r1;
+  }
+  result->redundancy = system.num_observations - unknowns;
+  if (result->redundancy <= 0) {
+    result->status = MpgcStatus::kSingular;
+    return;
+  }
+  result->sigma0 = std::sqrt(system.cost / result->redundancy);
+  // Resampling removes part of the search images' noise from the
+  // residuals (lsm.h): the same correction as single-patch matching.
+  if (options.lsm.correct_resampling_noise && samples > 0) {
+    const double kept = noise_kept / samples;
+    r1_sq /= patches.size();
+    result->sigma0 *= std::sqrt((1 + r1_sq) / (1 + r1_sq * kept));
+  }
+  // At the last system built: the step from it was small, but it is the
+  // system of the parameters reported.
+  Eigen::VectorXd unused;
+  Eigen::Matrix3d xx_inverse;
+  if (!SolveSystem(system, &unused, &xx_inverse)) {
+    result->status = MpgcStatus::kSingular;
+    return;
+  }
+  result->covariance = result->sigma0 * result->sigma0 * xx_inverse;
+  // The covariance above treats the grey residuals as independent. Where
+  // they are not (shading the radiometric model cannot follow, blur that
+  // differs between images: smooth residual fields), the patch carries
+  // fewer independent observations than pixels. The lag-one
+  // autocorrelations of the residuals along u and v (rho, clamped to
+  // [0, 0.9]) give the variance inflation of an AR(1) field,
+  // (1 + rho_u)(1 + rho_v) / ((1 - rho_u)(1 - rho_v)), which brings the
+  // rendered tower's median |error| / sigma from 2.4 towards its expected
+  // value. White noise leaves the covariance as it is.
+  ResidualAutocorrelation(problem.patch,
+                          problem.search,
+                          patches,
+                          options.lsm.interpolation,
+                          &result->residual_rho_u,
+                          &result->residual_rho_v);
+  // Bilinear resampling alone correlates the search patch's share of
+  // white noise: neighbouring samples at sub-pixel offset f share a pixel,
+  // correlation f (1 - f) / (f^2 + (1 - f)^2), about 0.25 on average; with
+  // that share about 40 % of the residual variance, about 0.1 (0.11
+  // measured on the exactly rendered plane of dense_test). That part
+  // loses no information about the match and is taken off.
+  constexpr double kResamplingRho = 0.1;
+  const auto excess = [&](double rho) {
+    return std::clamp((rho - kResamplingRho) / (1 - kResamplingRho), 0.0, 0.9);
+  };
+  const double rho_u = excess(result->residual_rho_u);
+  const double rho_v = excess(result->residual_rho_v);
+  result->covariance *= (1 + rho_u) * (1 + rho_v) / ((1 - rho_u) * (1 - rho_v));
+  result->xyz = xyz;
+  for (const PatchState& state : patches) {
+    result->views.push_back(state.view);
+    result->correlation.push_back(state.equations.Correlation());
+    result->xy.push_back(state.params.Position());
+  }
+  result->status = MpgcStatus::kConverged;
+}
+
 }  // namespace
 
 EpipolarSearchResult SearchMasterRay(const MpgcView& master,
@@ -637,198 +926,47 @@ MpgcResult MatchMpgc(const MpgcView& master,
     result.status = MpgcStatus::kBehindCamera;
     return result;
   }
-  const std::optional<MasterRays> rays = RaysOf(master, master_xy);
   // Numerical derivative step: a hundredth of a pixel's footprint.
-  const double step = 0.01 * depth / master.camera->MeanFocalLengthPx();
-  const double weight =
-      std::pow(options.grey_sigma / options.geometric_sigma_px, 2);
-
-  std::vector<PatchState> patches;
-  for (size_t j = 0; j < search.size(); ++j) {
-    PatchState state;
-    state.view = static_cast<int>(j);
-    Eigen::Matrix2d shape;
-    Eigen::Vector2d centre;
-    if (!Project(search[j], approximation, &centre) ||
-        (search[j].cam_from_world * approximation).z() <= 0 || !rays ||
-        !InducedShape(*rays, search[j], approximation, normal, &shape)) {
-      result.dropped.push_back(static_cast<int>(j));
-      continue;
-    }
-    state.start = LsmParameters::At(centre, shape);
-    patches.push_back(state);
-  }
-
-  // The normal equations at the current xyz and patches.
-  Eigen::Vector3d xyz = approximation;
-  const auto build = [&](int* failed, System* system) {
-    return BuildSystem(master,
-                       master_xy,
-                       search,
-                       patch,
-                       xyz,
-                       step,
-                       weight,
-                       options,
-                       &patches,
-                       failed,
-                       system);
-  };
+  const MpgcProblem problem{
+      master,
+      master_xy,
+      search,
+      patch,
+      0.01 * depth / master.camera->MeanFocalLengthPx(),
+      std::pow(options.grey_sigma / options.geometric_sigma_px, 2),
+      options};
+  std::vector<PatchState> patches = PlacePatches(problem,
+                                                 approximation,
+                                                 RaysOf(master, master_xy),
+                                                 normal,
+                                                 &result.dropped);
   // Solve; drop the worst search patch and solve again while one fails.
   // After a drop at convergence the rest start from where they were (their
   // solution barely changes without the culprit); after a divergence, from
   // the approximation.
-  for (PatchState& state : patches) state.params = state.start;
-  const auto small_step = [&](const Eigen::VectorXd& delta) {
-    // A patch moves by its centre's shift and by its shape's change at its
-    // corners, as lsm.h judges single patches.
-    for (size_t k = 0; k < patches.size(); ++k) {
-      const LsmVector d =
-          delta.segment<kNumLsmParams>(3 + kNumLsmParams * static_cast<int>(k));
-      const double corners = options.lsm.patch_radius *
-                             (std::abs(d[kLsmA1]) + std::abs(d[kLsmA2]) +
-                              std::abs(d[kLsmB1]) + std::abs(d[kLsmB2]));
-      if (d.head<2>().norm() >= options.convergence_px ||
-          corners >= options.convergence_px) {
-        return false;
-      }
-    }
-    return true;
-  };
+  Eigen::Vector3d xyz = approximation;
   while (true) {
     if (static_cast<int>(patches.size()) < options.min_search_views) {
       result.status = MpgcStatus::kTooFewViews;
       return result;
     }
-    int drop = -2;  // index into patches; -2: none
-    bool converged = false;
-    System system;
-    int failed = -2;
-    bool built = build(&failed, &system);
-    // Step control as lsm.h's: where a step makes the sum of squares grow
-    // (the period-two oscillation that resampling can drive), half of it is
-    // taken from where it started instead; a halved step that is small
-    // ends the iteration as a converged one does, and so does a third
-    // failure (at the step's start) or a step that barely lowers the sum
-    // (convergence_sigma). One system per iteration. On the rendered tower
-    // the two endings took the mean number of iterations per point from 21
-    // to 15 at the same accuracy; halving until small had spent a third of
-    // them.
-    Eigen::Vector3d step_xyz = xyz;
-    std::vector<PatchState> step_patches;
-    System step_system;
-    double step_cost = std::numeric_limits<double>::infinity();
-    int halvings = 0;
-    Eigen::VectorXd delta;
-    const auto take = [&](const Eigen::VectorXd& step) {
-      xyz = step_xyz + step.head<3>();
-      for (size_t k = 0; k < patches.size(); ++k) {
-        patches[k].params = step_patches[k].params;
-        patches[k].params.Add(step.segment<kNumLsmParams>(
-            3 + kNumLsmParams * static_cast<int>(k)));
-      }
-      failed = -2;
-      built = build(&failed, &system);
-    };
-    int iteration = 0;
-    for (; iteration < options.max_iterations; ++iteration) {
-      if (!built) {
-        if (failed == -1) {
-          result.status = MpgcStatus::kOutsideImage;
-          return result;
-        }
-        drop = failed;
-        break;
-      }
-      if (system.cost > step_cost) {
-        if (halvings == kMaxStepHalvings) {
-          // Neither the step nor its halves lower the sum of squares: the
-          // step's start is its least, as near the minimum as the
-          // linearisation can tell (the interpolated gradients are not
-          // exactly the derivatives of the interpolated values, so the
-          // Gauss-Newton step does not vanish there).
-          xyz = step_xyz;
-          patches = std::move(step_patches);
-          system = std::move(step_system);
-          built = true;
-          converged = true;
-          ++iteration;
-          break;
-        }
-        ++halvings;
-        delta *= 0.5;
-        take(delta);
-        if (small_step(delta)) {
-          converged = built;
-          ++iteration;
-          break;
-        }
-        continue;
-      }
-      if (step_cost - system.cost < options.convergence_sigma *
-                                        options.convergence_sigma *
-                                        system.cost / system.num_observations) {
-        // The step lowered the sum of squares by less than (k sigma0)^2
-        // (sigma0^2 as v'Pv over the observations, which outnumber the
-        // unknowns more than tenfold): it moved the solution by less than k of
-        // its standard deviations (v'Pv falls by dx' N dx, and sigma0^2 N^-1 is
-        // dx's covariance).
-        converged = true;
-        ++iteration;
-        break;
-      }
-      halvings = 0;
-      step_xyz = xyz;
-      step_patches = patches;
-      step_system = system;
-      step_cost = system.cost;
-      if (!SolveSystem(system, &delta)) {
-        result.status = MpgcStatus::kSingular;
-        return result;
-      }
-      take(delta);
-      // Patches that wandered off their approximation show something else.
-      double worst = options.max_shift_px;
-      for (size_t k = 0; k < patches.size(); ++k) {
-        const double moved =
-            (patches[k].params.Position() - patches[k].start.Position()).norm();
-        if (moved > worst) {
-          worst = moved;
-          drop = static_cast<int>(k);
-        }
-      }
-      if (drop >= 0) break;
-      if (small_step(delta)) {
-        converged = built;
-        ++iteration;
-        break;
-      }
+    const MpgcIterations run = Iterate(problem, &xyz, &patches);
+    if (run.failure) {
+      result.status = *run.failure;
+      return result;
     }
-    result.iterations += iteration;
+    result.iterations += run.iterations;
+    int drop = run.drop;
     bool warm = false;
-    if (drop < 0 && converged) {
+    if (drop < 0 && run.converged) {
       // A search patch that does not look like the template after all.
-      double lowest = options.min_correlation;
-      for (size_t k = 0; k < patches.size(); ++k) {
-        const double r = patches[k].equations.Correlation();
-        if (r < lowest) {
-          lowest = r;
-          drop = static_cast<int>(k);
-        }
-      }
+      drop = LeastCorrelated(patches, options.min_correlation);
       warm = true;
-    } else if (drop < 0 && built &&
+    } else if (drop < 0 && run.built &&
                static_cast<int>(patches.size()) > options.min_search_views) {
       // A patch that shows something else (an occluder, a blunder) keeps
       // the joint solution from settling: the one that fits worst goes.
-      double lowest = 2;
-      for (size_t k = 0; k < patches.size(); ++k) {
-        const double r = patches[k].equations.Correlation();
-        if (r < lowest) {
-          lowest = r;
-          drop = static_cast<int>(k);
-        }
-      }
+      drop = LeastCorrelated(patches, 2);
     }
     if (drop >= 0) {
       result.dropped.push_back(patches[drop].view);
@@ -839,79 +977,12 @@ MpgcResult MatchMpgc(const MpgcView& master,
       }
       continue;
     }
-    if (!converged) {
+    if (!run.converged) {
       result.status = MpgcStatus::kNotConverged;
       result.xyz = xyz;
       return result;
     }
-    int unknowns = 3;
-    double noise_kept = 0, r1_sq = 0;
-    int samples = 0;
-    for (const PatchState& state : patches) {
-      for (bool a : state.active) unknowns += a;
-      noise_kept += state.equations.noise_gain_sum;
-      samples += state.equations.num_observations;
-      r1_sq += state.params.r1 * state.params.r1;
-    }
-    result.redundancy = system.num_observations - unknowns;
-    if (result.redundancy <= 0) {
-      result.status = MpgcStatus::kSingular;
-      return result;
-    }
-    result.sigma0 = std::sqrt(system.cost / result.redundancy);
-    // Resampling removes part of the search images' noise from the
-    // residuals (lsm.h): the same correction as single-patch matching.
-    if (options.lsm.correct_resampling_noise && samples > 0) {
-      const double kept = noise_kept / samples;
-      r1_sq /= patches.size();
-      result.sigma0 *= std::sqrt((1 + r1_sq) / (1 + r1_sq * kept));
-    }
-    // At the last system built: the step from it was small, but it is the
-    // system of the parameters reported.
-    Eigen::VectorXd unused;
-    Eigen::Matrix3d xx_inverse;
-    if (!SolveSystem(system, &unused, &xx_inverse)) {
-      result.status = MpgcStatus::kSingular;
-      return result;
-    }
-    result.covariance = result.sigma0 * result.sigma0 * xx_inverse;
-    // The covariance above treats the grey residuals as independent. Where
-    // they are not (shading the radiometric model cannot follow, blur that
-    // differs between images: smooth residual fields), the patch carries
-    // fewer independent observations than pixels. The lag-one
-    // autocorrelations of the residuals along u and v (rho, clamped to
-    // [0, 0.9]) give the variance inflation of an AR(1) field,
-    // (1 + rho_u)(1 + rho_v) / ((1 - rho_u)(1 - rho_v)), which brings the
-    // rendered tower's median |error| / sigma from 2.4 towards its expected
-    // value. White noise leaves the covariance as it is.
-    ResidualAutocorrelation(patch,
-                            search,
-                            patches,
-                            options.lsm.interpolation,
-                            &result.residual_rho_u,
-                            &result.residual_rho_v);
-    // Bilinear resampling alone correlates the search patch's share of
-    // white noise: neighbouring samples at sub-pixel offset f share a pixel,
-    // correlation f (1 - f) / (f^2 + (1 - f)^2), about 0.25 on average; with
-    // that share about 40 % of the residual variance, about 0.1 (0.11
-    // measured on the exactly rendered plane of dense_test). That part
-    // loses no information about the match and is taken off.
-    constexpr double kResamplingRho = 0.1;
-    const auto excess = [&](double rho) {
-      return std::clamp(
-          (rho - kResamplingRho) / (1 - kResamplingRho), 0.0, 0.9);
-    };
-    const double rho_u = excess(result.residual_rho_u);
-    const double rho_v = excess(result.residual_rho_v);
-    result.covariance *=
-        (1 + rho_u) * (1 + rho_v) / ((1 - rho_u) * (1 - rho_v));
-    result.xyz = xyz;
-    for (const PatchState& state : patches) {
-      result.views.push_back(state.view);
-      result.correlation.push_back(state.equations.Correlation());
-      result.xy.push_back(state.params.Position());
-    }
-    result.status = MpgcStatus::kConverged;
+    ConcludeMpgc(problem, patches, xyz, run.system, &result);
     return result;
   }
 }
