@@ -973,6 +973,150 @@ struct Candidate {
   std::vector<double> weights;
 };
 
+// The observations: inverse depth and rate of each conjugate point in front
+// of both cameras.
+std::vector<Observation> InverseDepthObservations(
+    const ConjugatePoints& points,
+    const Eigen::Matrix3d& rotation,
+    const Eigen::Vector3d& base,
+    double c2) {
+  std::vector<Observation> observations;
+  for (int k = 0; k < points.size(); ++k) {
+    const Eigen::Vector3d& u1 = points.u1[k];
+    const Eigen::Vector3d& u2 = points.u2[k];
+    if (!(u1.z() < 0) || !(u2.z() < 0)) continue;
+    const EpipolarLine line = LineOf(rotation, base, u1, c2);
+    if (!line.valid) continue;
+    const Eigen::Vector2d m = u2.head<2>() * (c2 / -u2.z());
+    const double w = line.InverseDepthOf(m);
+    if (!line.InFront(w)) continue;
+    Observation o;
+    o.index = k;
+    o.xy = u1.head<2>();
+    o.w = w;
+    o.rate = line.Rate(w);
+    if (!std::isfinite(o.rate) || o.rate <= 0) continue;
+    observations.push_back(o);
+  }
+  return observations;
+}
+
+// Each observation's fold of the cross-validation, shuffled by the seed.
+std::vector<int> CrossValidationFolds(int num_observations,
+                                      const DisparitySurfaceOptions& options) {
+  std::vector<int> fold(num_observations);
+  std::vector<int> order(num_observations);
+  std::iota(order.begin(), order.end(), 0);
+  std::mt19937 rng(options.seed);
+  std::shuffle(order.begin(), order.end(), rng);
+  for (int k = 0; k < num_observations; ++k) {
+    fold[order[k]] = k % options.num_folds;
+  }
+  return fold;
+}
+
+// Cell size and smoothness by cross-validation: each cell size gets its
+// robust fit at the middle smoothness, then every smoothness is scored with
+// those weights (on the points the screening kept, so that the scores
+// compare). The cell sizes are the factors of `base_cell`, within the
+// grid's bounds over `longer`, the domain's longer side.
+Candidate ChooseGridAndSmoothness(std::vector<Observation>* observations,
+                                  const Eigen::AlignedBox2d& domain,
+                                  double base_cell,
+                                  const std::vector<double>& screened,
+                                  const std::vector<int>& fold,
+                                  const DisparitySurfaceOptions& options) {
+  const double longer = std::max(domain.sizes().x(), domain.sizes().y());
+  const std::vector<double>& smoothnesses = options.smoothness_candidates;
+  const double start_smoothness = smoothnesses[smoothnesses.size() / 2];
+  Candidate best;
+  std::vector<double> tried;
+  for (double factor : options.cell_size_factors) {
+    const double cell = std::clamp(factor * base_cell,
+                                   longer / options.max_cells,
+                                   longer / options.min_cells);
+    if (std::any_of(tried.begin(), tried.end(), [&](double c) {
+          return std::abs(c - cell) < 1e-6 * cell;
+        })) {
+      continue;
+    }
+    tried.push_back(cell);
+    const DisparitySurfaceRecord grid = MakeGrid(domain, cell);
+    for (Observation& o : *observations) o.cell = CellOf(grid, o.xy);
+    GridProblem problem(grid, *observations);
+    const RobustFit start = FitRobust(grid,
+                                      &problem,
+                                      *observations,
+                                      screened,
+                                      start_smoothness,
+                                      1.5 * cell,
+                                      options);
+    if (!start.success) continue;
+    for (double smoothness : smoothnesses) {
+      bool ok = false;
+      const std::vector<double> cv = CrossValidate(&problem,
+                                                   *observations,
+                                                   start.weights,
+                                                   fold,
+                                                   options.num_folds,
+                                                   smoothness,
+                                                   &ok);
+      const double score = ok ? CrossValidationScore(cv, screened)
+                              : std::numeric_limits<double>::infinity();
+      if (score < best.score) {
+        best.score = score;
+        best.cell = cell;
+        best.smoothness = smoothness;
+        best.weights = start.weights;
+      }
+    }
+  }
+  return best;
+}
+
+// The support of a fitted surface: the points used, their spacing, and for
+// each the distance to its nearest neighbour and to the nearest point of
+// the other folds (where the cross-validation predicted it from; infinite
+// where there is none).
+struct Support {
+  std::vector<int> members;
+  std::vector<double> nearest;
+  std::vector<double> nearest_other_fold;
+  double spacing_px = 1;
+};
+
+Support SupportOf(const std::vector<Observation>& observations,
+                  const std::vector<uint8_t>& used,
+                  const std::vector<int>& fold) {
+  Support support;
+  const int num_observations = static_cast<int>(observations.size());
+  for (int k = 0; k < num_observations; ++k) {
+    if (used[k]) support.members.push_back(k);
+  }
+  std::vector<double>& nearest = support.nearest;
+  std::vector<double>& nearest_other_fold = support.nearest_other_fold;
+  nearest.assign(num_observations, std::numeric_limits<double>::infinity());
+  nearest_other_fold = nearest;
+  for (int a : support.members) {
+    for (int b : support.members) {
+      if (a == b) continue;
+      const double d2 = (observations[a].xy - observations[b].xy).squaredNorm();
+      nearest[a] = std::min(nearest[a], d2);
+      if (fold[a] != fold[b]) {
+        nearest_other_fold[a] = std::min(nearest_other_fold[a], d2);
+      }
+    }
+  }
+  std::vector<double> spacings;
+  for (int k : support.members) {
+    nearest[k] = std::sqrt(nearest[k]);
+    nearest_other_fold[k] = std::sqrt(nearest_other_fold[k]);
+    if (std::isfinite(nearest[k])) spacings.push_back(nearest[k]);
+  }
+  support.spacing_px = std::max(1.0, Median(spacings));
+  return support;
+}
+
 }  // namespace
 
 DisparitySurface DisparitySurface::Fit(const ConjugatePoints& points,
@@ -1012,26 +1156,9 @@ DisparitySurface DisparitySurface::Fit(const ConjugatePoints& points,
     return surface;
   };
 
-  // The observations: inverse depth and rate of each point.
   const double c2 = vectors2.camera_constant_px();
-  std::vector<Observation> observations;
-  for (int k = 0; k < n; ++k) {
-    const Eigen::Vector3d& u1 = points.u1[k];
-    const Eigen::Vector3d& u2 = points.u2[k];
-    if (!(u1.z() < 0) || !(u2.z() < 0)) continue;
-    const EpipolarLine line = LineOf(surface.rotation_, surface.base_, u1, c2);
-    if (!line.valid) continue;
-    const Eigen::Vector2d m = u2.head<2>() * (c2 / -u2.z());
-    const double w = line.InverseDepthOf(m);
-    if (!line.InFront(w)) continue;
-    Observation o;
-    o.index = k;
-    o.xy = u1.head<2>();
-    o.w = w;
-    o.rate = line.Rate(w);
-    if (!std::isfinite(o.rate) || o.rate <= 0) continue;
-    observations.push_back(o);
-  }
+  std::vector<Observation> observations =
+      InverseDepthObservations(points, surface.rotation_, surface.base_, c2);
   const int num_observations = static_cast<int>(observations.size());
   if (num_observations < options.min_num_points) {
     return fail(StrCat("too few usable conjugate points (",
@@ -1052,71 +1179,12 @@ DisparitySurface DisparitySurface::Fit(const ConjugatePoints& points,
   }
   const double support_area =
       std::max(PolygonArea(ConvexHull(xy)), 1e-4 * domain.volume());
-  const double longer = std::max(domain.sizes().x(), domain.sizes().y());
   const double base_cell =
       std::sqrt(support_area * options.points_per_cell / num_observations);
-
-  // Robust start, and the folds of the cross-validation.
   const std::vector<double> screened = ScreenWeights(observations, options);
-  std::vector<int> fold(num_observations);
-  {
-    std::vector<int> order(num_observations);
-    std::iota(order.begin(), order.end(), 0);
-    std::mt19937 rng(options.seed);
-    std::shuffle(order.begin(), order.end(), rng);
-    for (int k = 0; k < num_observations; ++k) {
-      fold[order[k]] = k % options.num_folds;
-    }
-  }
-  const std::vector<double>& smoothnesses = options.smoothness_candidates;
-  const double start_smoothness = smoothnesses[smoothnesses.size() / 2];
-
-  // Cell size and smoothness by cross-validation: each cell size gets its
-  // robust fit at the middle smoothness, then every smoothness is scored
-  // with those weights (on the points the screening kept, so that the
-  // scores compare).
-  Candidate best;
-  std::vector<double> tried;
-  for (double factor : options.cell_size_factors) {
-    const double cell = std::clamp(factor * base_cell,
-                                   longer / options.max_cells,
-                                   longer / options.min_cells);
-    if (std::any_of(tried.begin(), tried.end(), [&](double c) {
-          return std::abs(c - cell) < 1e-6 * cell;
-        })) {
-      continue;
-    }
-    tried.push_back(cell);
-    const DisparitySurfaceRecord grid = MakeGrid(domain, cell);
-    for (Observation& o : observations) o.cell = CellOf(grid, o.xy);
-    GridProblem problem(grid, observations);
-    const RobustFit start = FitRobust(grid,
-                                      &problem,
-                                      observations,
-                                      screened,
-                                      start_smoothness,
-                                      1.5 * cell,
-                                      options);
-    if (!start.success) continue;
-    for (double smoothness : smoothnesses) {
-      bool ok = false;
-      const std::vector<double> cv = CrossValidate(&problem,
-                                                   observations,
-                                                   start.weights,
-                                                   fold,
-                                                   options.num_folds,
-                                                   smoothness,
-                                                   &ok);
-      const double score = ok ? CrossValidationScore(cv, screened)
-                              : std::numeric_limits<double>::infinity();
-      if (score < best.score) {
-        best.score = score;
-        best.cell = cell;
-        best.smoothness = smoothness;
-        best.weights = start.weights;
-      }
-    }
-  }
+  const std::vector<int> fold = CrossValidationFolds(num_observations, options);
+  const Candidate best = ChooseGridAndSmoothness(
+      &observations, domain, base_cell, screened, fold, options);
   if (!std::isfinite(best.score)) {
     return fail("the surface cannot be fitted (points degenerate)");
   }
@@ -1167,33 +1235,11 @@ DisparitySurface DisparitySurface::Fit(const ConjugatePoints& points,
                                                &ok);
   if (!ok) return fail("the cross-validation fits are singular");
 
-  // The support: the points used, their hull and spacing; and for each
-  // point the distance to the nearest point of the other folds (where it
-  // was predicted from).
-  std::vector<int> members;
-  for (int k = 0; k < num_observations; ++k) {
-    if (used[k]) members.push_back(k);
-  }
-  std::vector<double> nearest(num_observations,
-                              std::numeric_limits<double>::infinity());
-  std::vector<double> nearest_other_fold = nearest;
-  for (int a : members) {
-    for (int b : members) {
-      if (a == b) continue;
-      const double d2 = (observations[a].xy - observations[b].xy).squaredNorm();
-      nearest[a] = std::min(nearest[a], d2);
-      if (fold[a] != fold[b]) {
-        nearest_other_fold[a] = std::min(nearest_other_fold[a], d2);
-      }
-    }
-  }
-  std::vector<double> spacings;
-  for (int k : members) {
-    nearest[k] = std::sqrt(nearest[k]);
-    nearest_other_fold[k] = std::sqrt(nearest_other_fold[k]);
-    if (std::isfinite(nearest[k])) spacings.push_back(nearest[k]);
-  }
-  record.spacing_px = std::max(1.0, Median(spacings));
+  // The support: the points used, their hull and spacing.
+  const Support support = SupportOf(observations, used, fold);
+  const std::vector<int>& members = support.members;
+  const std::vector<double>& nearest_other_fold = support.nearest_other_fold;
+  record.spacing_px = support.spacing_px;
   for (int k : members) {
     record.support_points.push_back(observations[k].xy);
     record.support_inverse_depth.push_back(observations[k].w);
