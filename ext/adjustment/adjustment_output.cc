@@ -582,7 +582,8 @@ std::string Triple(const Json& v, const char* format) {
       format, v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
 }
 
-std::string Printout(const Json& r) {
+// The title, the inputs, the datum and the notes.
+std::string PrintoutHeader(const Json& r) {
   std::string out;
   out += Rule('=');
   out +=
@@ -641,7 +642,12 @@ std::string Printout(const Json& r) {
   for (const Json& note : r["notes"]) {
     out += " note: " + note.get<std::string>() + "\n";
   }
+  return out;
+}
 
+// The steps of the adjustment: iterations, sigma0 and time.
+std::string PrintoutIterations(const Json& r) {
+  std::string out;
   out += "\n ITERATIONS\n";
   for (const Json& step : r["steps"]) {
     out += StringPrintf("   %-40s %4d it.",
@@ -653,7 +659,12 @@ std::string Printout(const Json& r) {
     }
     out += StringPrintf("   %6.2f s\n", step["time_s"].get<double>());
   }
+  return out;
+}
 
+// Observations, unknowns, redundancy, sigma0 and the theoretical precision.
+std::string PrintoutStatistics(const Json& r) {
+  std::string out;
   const Json& s = r["statistics"];
   out += "\n" + Rule();
   out += " STATISTICS\n" + Rule();
@@ -738,7 +749,12 @@ std::string Printout(const Json& r) {
                 "rotations about the camera axes x, y, z: %.3f %.3f %.3f "
                 "mdeg") +
          "\n";
+  return out;
+}
 
+// The self-calibration: parameters kept and removed, their correlations.
+std::string PrintoutCameraParameters(const Json& r) {
+  std::string out;
   const Json& sc = r["self_calibration"];
   out += "\n" + Rule();
   out += StringPrintf(
@@ -796,7 +812,12 @@ std::string Printout(const Json& r) {
     }
     out += "\n";
   }
+  return out;
+}
 
+// The observations data snooping rejected.
+std::string PrintoutBlunders(const Json& r) {
+  std::string out;
   const Json& b = r["blunder_detection"];
   out += "\n" + Rule();
   out += StringPrintf(
@@ -824,7 +845,12 @@ std::string Printout(const Json& r) {
                           o["redundancy"].get<double>());
     }
   }
+  return out;
+}
 
+// Check points, control points and distances.
+std::string PrintoutControl(const Json& r) {
+  std::string out;
   const Json& checks = r["check_points"];
   if (checks["num"].get<int>() > 0) {
     out += "\n" + Rule();
@@ -874,7 +900,12 @@ std::string Printout(const Json& r) {
                           d["adjusted_m"].get<double>());
     }
   }
+  return out;
+}
 
+// Each image's projection centre and its precision.
+std::string PrintoutExteriorOrientations(const Json& r) {
+  std::string out;
   out += "\n" + Rule();
   out += " EXTERIOR ORIENTATIONS\n" + Rule();
   out +=
@@ -888,7 +919,12 @@ std::string Printout(const Json& r) {
         Triple(image["center_std_dev_mm"], "%5.1f %5.1f %5.1f").c_str(),
         Triple(image["rotation_std_dev_mdeg"], "%5.1f %5.1f %5.1f").c_str());
   }
+  return out;
+}
 
+// Each object point and its precision.
+std::string PrintoutObjectPoints(const Json& r) {
+  std::string out;
   out += "\n" + Rule();
   out += " OBJECT POINTS\n" + Rule();
   out +=
@@ -905,8 +941,15 @@ std::string Printout(const Json& r) {
                         Triple(p["std_dev_mm"], "%5.1f %5.1f %5.1f").c_str(),
                         p["rays"].get<int>());
   }
-  out += Rule('=');
   return out;
+}
+
+// The printout of `bayon adjust`, section by section, from its report.
+std::string Printout(const Json& r) {
+  return PrintoutHeader(r) + PrintoutIterations(r) + PrintoutStatistics(r) +
+         PrintoutCameraParameters(r) + PrintoutBlunders(r) +
+         PrintoutControl(r) + PrintoutExteriorOrientations(r) +
+         PrintoutObjectPoints(r) + Rule('=');
 }
 
 }  // namespace
