@@ -95,73 +95,55 @@ nlohmann::ordered_json OptionsToJson(const TowerSceneOptions& o) {
   return json;
 }
 
-}  // namespace
-
-TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
-                                          const std::string& workspace,
-                                          bool overwrite) {
-  options.Check();
-  const Timer total_timer;
-  OutputDirectory output(workspace, overwrite);
-  TowerWorkspaceSummary summary;
-  const TowerScene scene = PlanTowerScene(options);
-  const MeshRenderer renderer = MakeTowerRenderer(scene);
+// The photographs into images/, each encoded and written while the next one
+// renders (encoding is single-threaded and would leave the other cores
+// idle); returns where the targets appear in them.
+std::vector<ImageMeasurement> RenderPhotographs(
+    const TowerScene& scene,
+    const MeshRenderer& renderer,
+    const TowerSceneOptions& options,
+    const OutputDirectory& output,
+    std::vector<double>* render_seconds,
+    TowerWorkspaceSummary* summary) {
   const int n = static_cast<int>(scene.stations.size());
-  const std::string gt = output.File("gt");
-  fs::create_directories(gt + "/sparse");
-
-  // The true surface with its texture, and the ground, written while the
-  // photographs render (60 MB, single-threaded encoding).
-  std::future<size_t> surface_writing = std::async(std::launch::async, [&] {
-    PlyWriteOptions ply;
-    ply.comment = "TextureFile surface_texture.png";
-    const TriangleMesh surface = scene.model.Surface();
-    WriteMeshPly(surface, gt + "/surface.ply", ply);
-    WriteImage(gt + "/surface_texture.png", scene.model.texture);
-    const size_t ground_first =
-        scene.model.num_object_faces + scene.model.num_target_faces;
-    WriteMeshPly(
-        SubMesh(scene.model.mesh, ground_first, scene.model.mesh.NumFaces()),
-        gt + "/ground.ply");
-    return surface.NumFaces();
-  });
-
-  // The photographs, and where the targets appear in them.
   fs::create_directories(output.File("images"));
   std::vector<ImageMeasurement> observations;
-  std::vector<double> render_seconds(n);
-  {
-    Progress progress("Rendering photographs", n, "images");
-    std::vector<int> params;
-    if (options.jpeg_quality > 0) {
-      params = {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality};
-    }
-    // Each photograph is encoded and written while the next one renders
-    // (encoding is single-threaded and would leave the other cores idle).
-    std::future<void> writing;
-    for (int i = 0; i < n; ++i) {
-      RenderResult render;
-      cv::Mat photo =
-          RenderTowerPhotograph(scene, renderer, i, options, &render);
-      render_seconds[i] = render.stats.seconds;
-      summary.render_seconds += render.stats.seconds;
-      for (const ImageMeasurement& m : VisibleTargets(scene, i, render)) {
-        observations.push_back(m);
-      }
-      if (writing.valid()) writing.get();
-      writing = std::async(
-          std::launch::async,
-          [&params,
-           path = output.File("images/" + scene.stations[i].name),
-           photo = std::move(photo)] { WriteImage(path, photo, params); });
-      progress.Add();
+  render_seconds->assign(n, 0);
+  Progress progress("Rendering photographs", n, "images");
+  std::vector<int> params;
+  if (options.jpeg_quality > 0) {
+    params = {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality};
+  }
+  std::future<void> writing;
+  for (int i = 0; i < n; ++i) {
+    RenderResult render;
+    cv::Mat photo = RenderTowerPhotograph(scene, renderer, i, options, &render);
+    (*render_seconds)[i] = render.stats.seconds;
+    summary->render_seconds += render.stats.seconds;
+    for (const ImageMeasurement& m : VisibleTargets(scene, i, render)) {
+      observations.push_back(m);
     }
     if (writing.valid()) writing.get();
-    progress.Finish();
+    writing = std::async(
+        std::launch::async,
+        [&params,
+         path = output.File("images/" + scene.stations[i].name),
+         photo = std::move(photo)] { WriteImage(path, photo, params); });
+    progress.Add();
   }
+  if (writing.valid()) writing.get();
+  progress.Finish();
+  return observations;
+}
 
-  // The true model: cameras, poses, and the targets as 3D points observed
-  // at their exact image positions.
+// The true model into gt/sparse (as COLMAP's model) and gt/calibration.json:
+// cameras, poses, and the targets as 3D points observed at their exact image
+// positions.
+void WriteTrueModel(const TowerScene& scene,
+                    const std::vector<ImageMeasurement>& observations,
+                    const std::string& gt,
+                    TowerWorkspaceSummary* summary) {
+  const int n = static_cast<int>(scene.stations.size());
   Scene truth;
   truth.cameras.Set(scene.camera.camera_id, scene.camera);
   std::map<std::string, image_t> image_ids;
@@ -191,20 +173,25 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
     truth.points3D.at(id).color = Eigen::Matrix<uint8_t, 3, 1>(255, 255, 255);
   }
   truth.UpdateReprojectionErrors();
-  Scene colmap_truth = truth;
   const std::vector<SceneCameraConversion> conversions =
-      ConvertSceneCamerasToColmap(&colmap_truth);
+      ConvertSceneCamerasToColmap(&truth);
   std::vector<CalibrationEntry> calibration;
   for (const SceneCameraConversion& conversion : conversions) {
     calibration.push_back(CalibrationEntryFromConversion(conversion));
-    summary.colmap_fit_rms_px = conversion.conversion.rms_residual_px;
+    summary->colmap_fit_rms_px = conversion.conversion.rms_residual_px;
   }
-  WriteModel(colmap_truth, gt + "/sparse", ModelFormat::kText);
+  WriteModel(truth, gt + "/sparse", ModelFormat::kText);
   WriteCalibrationJson(gt + "/calibration.json", calibration);
+}
 
-  summary.num_surface_faces = surface_writing.get();
-
-  // Control: exact in gt/control, as a user would have them in control/.
+// Control: exact in gt/control, and as a user would have them in control/
+// (surveyed with control_sigma_m, measured with control_sigma_px).
+void WriteControl(const TowerScene& scene,
+                  const TowerSceneOptions& options,
+                  const std::vector<ImageMeasurement>& observations,
+                  const std::string& gt,
+                  const OutputDirectory& output,
+                  TowerWorkspaceSummary* summary) {
   std::vector<ControlPoint> points, user_points;
   std::mt19937 rng(options.seed * 31337u + 1u);
   std::normal_distribution<double> gauss(0, 1);
@@ -258,30 +245,38 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
   WriteImageMeasurements(output.File("control/observations.txt"),
                          user_observations);
   WriteDistances(output.File("control/distances.txt"), {bar});
-  summary.num_targets = static_cast<int>(points.size());
-  summary.num_observations = static_cast<int>(observations.size());
+  summary->num_targets = static_cast<int>(points.size());
+  summary->num_observations = static_cast<int>(observations.size());
+}
 
-  // Held-out viewpoints: the digital camera's COLMAP fit.
-  {
-    Scene heldout;
-    Camera camera = SyntheticCamera(options.camera);
-    heldout.cameras.Set(camera.camera_id, camera);
-    for (size_t k = 0; k < scene.heldout_cam_from_world.size(); ++k) {
-      Image image;
-      image.image_id = static_cast<image_t>(k + 1);
-      char name[48];
-      std::snprintf(name, sizeof(name), "heldout_%02d.png", int(k + 1));
-      image.name = name;
-      image.camera_id = camera.camera_id;
-      image.cam_from_world = scene.heldout_cam_from_world[k];
-      heldout.images.Set(image.image_id, image);
-    }
-    ConvertSceneCamerasToColmap(&heldout);
-    fs::create_directories(gt + "/heldout");
-    WriteModel(heldout, gt + "/heldout", ModelFormat::kText);
+// Held-out viewpoints into gt/heldout: the digital camera's COLMAP fit.
+void WriteHeldout(const TowerScene& scene,
+                  const TowerSceneOptions& options,
+                  const std::string& gt) {
+  Scene heldout;
+  Camera camera = SyntheticCamera(options.camera);
+  heldout.cameras.Set(camera.camera_id, camera);
+  for (size_t k = 0; k < scene.heldout_cam_from_world.size(); ++k) {
+    Image image;
+    image.image_id = static_cast<image_t>(k + 1);
+    char name[48];
+    std::snprintf(name, sizeof(name), "heldout_%02d.png", int(k + 1));
+    image.name = name;
+    image.camera_id = camera.camera_id;
+    image.cam_from_world = scene.heldout_cam_from_world[k];
+    heldout.images.Set(image.image_id, image);
   }
+  ConvertSceneCamerasToColmap(&heldout);
+  fs::create_directories(gt + "/heldout");
+  WriteModel(heldout, gt + "/heldout", ModelFormat::kText);
+}
 
-  // Image frames (the interior orientation in the narrow sense).
+// The image frames (the interior orientation in the narrow sense) into
+// gt/interior.json; returns the mean ground sampling distance at the tower.
+double WriteInteriorTruth(const TowerScene& scene,
+                          const TowerSceneOptions& options,
+                          const std::string& gt) {
+  const int n = static_cast<int>(scene.stations.size());
   nlohmann::ordered_json interior;
   interior["format"] = "bayon-interior-truth";
   interior["film_scan"] = options.film_scan;
@@ -315,9 +310,17 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
                scene.camera.MeanFocalLengthPx();
   }
   WriteFileAtomically(gt + "/interior.json", interior.dump(2) + "\n");
-  summary.gsd_m = gsd_sum / n;
+  return gsd_sum / n;
+}
 
-  // Everything about the rendering, for evaluation and re-rendering.
+// Everything about the rendering, for evaluation and re-rendering
+// (gt/synth.json, less the total time).
+nlohmann::ordered_json DescribeRendering(
+    const TowerScene& scene,
+    const TowerSceneOptions& options,
+    const std::vector<double>& render_seconds,
+    const TowerWorkspaceSummary& summary) {
+  const int n = static_cast<int>(scene.stations.size());
   nlohmann::ordered_json description = OptionsToJson(options);
   Eigen::AlignedBox3d region = scene.model.object_bounds;
   region.min() -= Eigen::Vector3d(0.05, 0.05, 0);
@@ -363,39 +366,86 @@ TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
          std::asin(std::abs(base.z()) / base.norm()) * 180 / M_PI}};
   }
   description["render_seconds"] = summary.render_seconds;
+  return description;
+}
 
-  // The database, as `bayon import --single_camera 1` would write it.
-  {
-    Database database(output.File("database.db"), Database::Mode::kCreate);
-    auto transaction = database.BeginTransaction();
-    Camera camera = scene.camera;
-    if (!options.truth_in_database) {
-      camera = Camera::Create(
-          CameraModelId::kBrownBeyer,
-          options.camera.focal_length_mm / options.camera.pixel_pitch_mm,
-          scene.camera.width,
-          scene.camera.height,
-          options.camera.pixel_pitch_mm);
-      camera.has_prior_focal_length = true;
-    }
-    const camera_t camera_id = WriteCameraWithCalibration(&database, camera);
-    for (int i = 0; i < n; ++i) {
-      DatabaseImage image;
-      image.name = scene.stations[i].name;
-      image.camera_id = camera_id;
-      const image_t image_id = database.WriteImage(image);
-      if (options.truth_in_database) {
-        InteriorRecord record;
-        record.frame = scene.stations[i].frame ? *scene.stations[i].frame
-                                               : scene.camera.DefaultFrame();
-        record.method = scene.stations[i].frame ? "synthetic_truth"
-                                                : kDigitalInteriorMethod;
-        WriteInterior(&database, image_id, record);
-      }
-    }
-    transaction.Commit();
+// The database, as `bayon import --single_camera 1` would write it: the
+// true camera and frames, or (without truth_in_database) the camera as
+// EXIF would give it.
+void WriteTowerDatabase(const TowerScene& scene,
+                        const TowerSceneOptions& options,
+                        const std::string& path) {
+  const int n = static_cast<int>(scene.stations.size());
+  Database database(path, Database::Mode::kCreate);
+  auto transaction = database.BeginTransaction();
+  Camera camera = scene.camera;
+  if (!options.truth_in_database) {
+    camera = Camera::Create(
+        CameraModelId::kBrownBeyer,
+        options.camera.focal_length_mm / options.camera.pixel_pitch_mm,
+        scene.camera.width,
+        scene.camera.height,
+        options.camera.pixel_pitch_mm);
+    camera.has_prior_focal_length = true;
   }
-  summary.num_images = n;
+  const camera_t camera_id = WriteCameraWithCalibration(&database, camera);
+  for (int i = 0; i < n; ++i) {
+    DatabaseImage image;
+    image.name = scene.stations[i].name;
+    image.camera_id = camera_id;
+    const image_t image_id = database.WriteImage(image);
+    if (options.truth_in_database) {
+      InteriorRecord record;
+      record.frame = scene.stations[i].frame ? *scene.stations[i].frame
+                                             : scene.camera.DefaultFrame();
+      record.method =
+          scene.stations[i].frame ? "synthetic_truth" : kDigitalInteriorMethod;
+      WriteInterior(&database, image_id, record);
+    }
+  }
+  transaction.Commit();
+}
+
+}  // namespace
+
+TowerWorkspaceSummary WriteTowerWorkspace(const TowerSceneOptions& options,
+                                          const std::string& workspace,
+                                          bool overwrite) {
+  options.Check();
+  const Timer total_timer;
+  OutputDirectory output(workspace, overwrite);
+  TowerWorkspaceSummary summary;
+  const TowerScene scene = PlanTowerScene(options);
+  const MeshRenderer renderer = MakeTowerRenderer(scene);
+  const std::string gt = output.File("gt");
+  fs::create_directories(gt + "/sparse");
+  // The true surface with its texture, and the ground, written while the
+  // photographs render (60 MB, single-threaded encoding).
+  std::future<size_t> surface_writing = std::async(std::launch::async, [&] {
+    PlyWriteOptions ply;
+    ply.comment = "TextureFile surface_texture.png";
+    const TriangleMesh surface = scene.model.Surface();
+    WriteMeshPly(surface, gt + "/surface.ply", ply);
+    WriteImage(gt + "/surface_texture.png", scene.model.texture);
+    const size_t ground_first =
+        scene.model.num_object_faces + scene.model.num_target_faces;
+    WriteMeshPly(
+        SubMesh(scene.model.mesh, ground_first, scene.model.mesh.NumFaces()),
+        gt + "/ground.ply");
+    return surface.NumFaces();
+  });
+  std::vector<double> render_seconds;
+  const std::vector<ImageMeasurement> observations = RenderPhotographs(
+      scene, renderer, options, output, &render_seconds, &summary);
+  WriteTrueModel(scene, observations, gt, &summary);
+  summary.num_surface_faces = surface_writing.get();
+  WriteControl(scene, options, observations, gt, output, &summary);
+  WriteHeldout(scene, options, gt);
+  summary.gsd_m = WriteInteriorTruth(scene, options, gt);
+  nlohmann::ordered_json description =
+      DescribeRendering(scene, options, render_seconds, summary);
+  WriteTowerDatabase(scene, options, output.File("database.db"));
+  summary.num_images = static_cast<int>(scene.stations.size());
   summary.total_seconds = total_timer.Seconds();
   description["total_seconds"] = summary.total_seconds;
   WriteFileAtomically(gt + "/synth.json", description.dump(2) + "\n");
