@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
 #include <sstream>
 
@@ -584,27 +585,22 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
   return images;
 }
 
-TexturedMesh MapTexture(const TriangleMesh& input,
-                        const std::vector<TextureImage>& images,
-                        const TextureOptions& options) {
-  options.Check();
-  if (input.NumFaces() == 0) ThrowInputError("the mesh has no faces");
-  if (images.empty()) ThrowInputError("no images to texture the mesh from");
-  TexturedMesh result;
-  result.mesh = input;
-  result.mesh.face_texcoords.clear();
-  const TriangleMesh& mesh = result.mesh;
-  TextureReport& report = result.report;
+namespace {
+
+// 2. Visibility and projected areas of every face in every photograph; 1.
+// the pre-processing, which equalises the histogram of the pixels the mesh
+// covers (or balances the photographs' colours), into `colors`.
+std::vector<std::vector<FaceView>> FindFaceViews(
+    const TriangleMesh& mesh,
+    const std::vector<TextureImage>& images,
+    const TextureOptions& options,
+    std::vector<cv::Mat>* colors,
+    TextureReport* report) {
   const int num_faces = static_cast<int>(mesh.NumFaces());
   const int num_images = static_cast<int>(images.size());
-  report.num_images = num_images;
-  report.num_faces = num_faces;
-
-  // 2. Visibility and projected areas; 1. the pre-processing, which
-  // equalises the histogram of the pixels the mesh covers.
-  Timer timer;
+  const Timer timer;
   std::vector<std::vector<FaceView>> views(num_faces);
-  std::vector<cv::Mat> colors(num_images);
+  colors->assign(num_images, cv::Mat());
   {
     MeshRenderer renderer(mesh);
     Progress progress("visibility", images.size(), "images");
@@ -615,52 +611,53 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       for (int face = 0; face < num_faces; ++face) {
         if (areas[face] > 0) views[face].push_back({j, areas[face]});
       }
-      Timer preprocess;
-      colors[j] = Preprocess(images[j].bgr, covered, options);
-      report.seconds_preprocess += preprocess.Seconds();
+      const Timer preprocess;
+      (*colors)[j] = Preprocess(images[j].bgr, covered, options);
+      report->seconds_preprocess += preprocess.Seconds();
       progress.Add();
     }
     progress.Finish();
   }
-  report.seconds_visibility = timer.Seconds() - report.seconds_preprocess;
+  report->seconds_visibility = timer.Seconds() - report->seconds_preprocess;
   if (options.preprocess == TexturePreprocess::kBalance) {
-    Timer balance;
-    colors = BalancedColors(mesh, views, images, options, &report);
-    report.seconds_preprocess += balance.Seconds();
+    const Timer balance;
+    *colors = BalancedColors(mesh, views, images, options, report);
+    report->seconds_preprocess += balance.Seconds();
   }
-  timer = Timer();
+  return views;
+}
 
-  // 3. The optimal image of each face.
-  std::vector<int> best(num_faces, -1);
-  std::vector<float> best_area(num_faces, 0.0f);
+// 3. The optimal image of each face, where it appears largest (-1: none
+// sees it), and that area.
+void ChooseOptimalImages(const std::vector<std::vector<FaceView>>& views,
+                         std::vector<int>* best,
+                         std::vector<float>* best_area,
+                         TextureReport* report) {
+  const int num_faces = static_cast<int>(views.size());
+  best->assign(num_faces, -1);
+  best_area->assign(num_faces, 0.0f);
   size_t num_views = 0;
   for (int face = 0; face < num_faces; ++face) {
     for (const FaceView& v : views[face]) {
-      if (v.area_px > best_area[face]) {
-        best_area[face] = v.area_px;
-        best[face] = v.image;
+      if (v.area_px > (*best_area)[face]) {
+        (*best_area)[face] = v.area_px;
+        (*best)[face] = v.image;
       }
     }
     num_views += views[face].size();
-    if (best[face] < 0) ++report.num_unseen_faces;
+    if ((*best)[face] < 0) ++report->num_unseen_faces;
   }
-  if (report.num_unseen_faces == num_faces) {
+  if (report->num_unseen_faces == num_faces) {
     ThrowInputError(
         "no photograph sees the mesh (check that the mesh and "
         "the model share one coordinate system)");
   }
-  report.mean_views_per_face = double(num_views) / num_faces;
+  report->mean_views_per_face = double(num_views) / num_faces;
+}
 
-  // The image each face's texture is drawn in (its chart): the optimal one,
-  // except where most of its edge neighbours use another image that sees
-  // the face nearly as large; that merges the speckle of single faces whose
-  // optimal image differs from their neighbours' by a few per cent of area
-  // into larger charts (fewer seams, a fuller atlas).
-  const std::vector<EdgeFace> edges = SortedEdges(mesh);
-  std::vector<int> source = best;
-  std::vector<float> source_area = best_area;
-  // Faces across each manifold edge (-1: none).
-  const std::vector<TwoFaceEdge> two_face_edges = TwoFaceEdges(edges);
+// The faces across each face's manifold edges (-1: none).
+std::vector<std::array<int, 3>> FaceNeighbors(
+    const std::vector<TwoFaceEdge>& two_face_edges, int num_faces) {
   std::vector<std::array<int, 3>> neighbors(num_faces, {-1, -1, -1});
   for (const TwoFaceEdge& e : two_face_edges) {
     for (const auto& [f, g] :
@@ -673,67 +670,89 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       }
     }
   }
-  if (options.chart_merge_ratio < 1) {
-    for (int iteration = 0; iteration < 5; ++iteration) {
-      int changed = 0;
-      for (int face = 0; face < num_faces; ++face) {
-        if (source[face] < 0) continue;
-        const auto& n = neighbors[face];
-        for (int k = 0; k < 3; ++k) {
-          if (n[k] < 0 || source[n[k]] < 0 || source[n[k]] == source[face]) {
-            continue;
-          }
-          const int label = source[n[k]];
-          int votes = 0;
-          for (int m = 0; m < 3; ++m)
-            votes += n[m] >= 0 && source[n[m]] == label;
-          if (votes < 2) continue;
-          for (const FaceView& v : views[face]) {
-            if (v.image == label &&
-                v.area_px >= options.chart_merge_ratio * best_area[face]) {
-              source[face] = label;
-              source_area[face] = v.area_px;
-              ++changed;
-            }
-          }
-          break;
-        }
-      }
-      if (changed == 0) break;
-    }
-  }
-  for (int face = 0; face < num_faces; ++face) {
-    if (source[face] >= 0) ++report.faces_per_image[images[source[face]].name];
-  }
+  return neighbors;
+}
 
-  // Texel size: the median ground sampling distance of the faces in their
-  // optimal images, weighted by the faces' areas.
-  std::vector<double> face_area(num_faces);
-  for (int face = 0; face < num_faces; ++face) {
-    face_area[face] = TriangleArea3(mesh, face);
-  }
-  double texel_size = options.texel_size;
-  if (texel_size <= 0) {
-    std::vector<std::pair<double, double>> gsd;  // (gsd, weight)
-    double total = 0;
+// The image each face's texture is drawn in (its chart): the optimal one,
+// except where most of its edge neighbours use another image that sees the
+// face nearly as large; that merges the speckle of single faces whose
+// optimal image differs from their neighbours' by a few per cent of area
+// into larger charts (fewer seams, a fuller atlas).
+void MergeSpeckle(const std::vector<std::array<int, 3>>& neighbors,
+                  const std::vector<std::vector<FaceView>>& views,
+                  const std::vector<float>& best_area,
+                  const TextureOptions& options,
+                  std::vector<int>* source,
+                  std::vector<float>* source_area) {
+  if (options.chart_merge_ratio >= 1) return;
+  const int num_faces = static_cast<int>(views.size());
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    int changed = 0;
     for (int face = 0; face < num_faces; ++face) {
-      if (source[face] < 0 || face_area[face] <= 0 || source_area[face] <= 0) {
-        continue;
+      if ((*source)[face] < 0) continue;
+      const auto& n = neighbors[face];
+      for (int k = 0; k < 3; ++k) {
+        if (n[k] < 0 || (*source)[n[k]] < 0 ||
+            (*source)[n[k]] == (*source)[face]) {
+          continue;
+        }
+        const int label = (*source)[n[k]];
+        int votes = 0;
+        for (int m = 0; m < 3; ++m) {
+          votes += n[m] >= 0 && (*source)[n[m]] == label;
+        }
+        if (votes < 2) continue;
+        for (const FaceView& v : views[face]) {
+          if (v.image == label &&
+              v.area_px >= options.chart_merge_ratio * best_area[face]) {
+            (*source)[face] = label;
+            (*source_area)[face] = v.area_px;
+            ++changed;
+          }
+        }
+        break;
       }
-      gsd.emplace_back(std::sqrt(face_area[face] / source_area[face]),
-                       face_area[face]);
-      total += face_area[face];
     }
-    std::sort(gsd.begin(), gsd.end());
-    double sum = 0;
-    for (const auto& [value, weight] : gsd) {
-      texel_size = value;
-      sum += weight;
-      if (sum >= 0.5 * total) break;
-    }
+    if (changed == 0) break;
   }
+}
 
-  // 4. Charts: faces joined across edges where they share the optimal image.
+// Texel size: the median ground sampling distance of the faces in their
+// source images, weighted by the faces' areas.
+double MedianTexelSize(const std::vector<double>& face_area,
+                       const std::vector<int>& source,
+                       const std::vector<float>& source_area) {
+  std::vector<std::pair<double, double>> gsd;  // (gsd, weight)
+  double total = 0;
+  for (size_t face = 0; face < face_area.size(); ++face) {
+    if (source[face] < 0 || face_area[face] <= 0 || source_area[face] <= 0) {
+      continue;
+    }
+    gsd.emplace_back(std::sqrt(face_area[face] / source_area[face]),
+                     face_area[face]);
+    total += face_area[face];
+  }
+  std::sort(gsd.begin(), gsd.end());
+  double texel_size = 0, sum = 0;
+  for (const auto& [value, weight] : gsd) {
+    texel_size = value;
+    sum += weight;
+    if (sum >= 0.5 * total) break;
+  }
+  return texel_size;
+}
+
+// 4. Charts: faces joined across edges where they share the source image;
+// the faces no photograph sees, apart.
+struct ChartLayout {
+  std::vector<Chart> charts;
+  std::vector<int> chart_of_face;  // -1: unseen
+  Chart unseen;
+};
+
+ChartLayout BuildCharts(const std::vector<EdgeFace>& edges,
+                        const std::vector<int>& source) {
+  const int num_faces = static_cast<int>(source.size());
   UnionFind joined(num_faces);
   for (size_t i = 0; i + 1 < edges.size(); ++i) {
     for (size_t k = i + 1; k < edges.size() && edges[k].SameEdge(edges[i]);
@@ -744,62 +763,37 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       }
     }
   }
-  std::vector<Chart> charts;
+  ChartLayout layout;
   std::vector<int> chart_of_root(num_faces, -1);
-  std::vector<int> chart_of_face(num_faces, -1);  // -1: unseen
-  Chart unseen;
+  layout.chart_of_face.assign(num_faces, -1);
   for (int face = 0; face < num_faces; ++face) {
     if (source[face] < 0) {
-      unseen.faces.push_back(face);
+      layout.unseen.faces.push_back(face);
       continue;
     }
     int& chart = chart_of_root[joined.Find(face)];
     if (chart < 0) {
-      chart = static_cast<int>(charts.size());
-      charts.emplace_back();
-      charts.back().image = source[face];
+      chart = static_cast<int>(layout.charts.size());
+      layout.charts.emplace_back();
+      layout.charts.back().image = source[face];
     }
-    charts[chart].faces.push_back(face);
-    chart_of_face[face] = chart;
+    layout.charts[chart].faces.push_back(face);
+    layout.chart_of_face[face] = chart;
   }
-  report.num_charts = static_cast<int>(charts.size());
+  return layout;
+}
 
-  // 6. Seam levelling: corner adjustments from the colours the faces would
-  // take on both sides of each chart border.
-  auto face_sources = [&](int face) {
-    return BlendSources(mesh,
-                        face,
-                        views[face],
-                        source[face],
-                        best_area[face],
-                        images,
-                        colors,
-                        options);
-  };
-  std::vector<std::array<Eigen::Vector3f, 3>> corner_adjustment(
-      num_faces,
-      {Eigen::Vector3f::Zero(),
-       Eigen::Vector3f::Zero(),
-       Eigen::Vector3f::Zero()});
-  if (options.seam_leveling) {
-    corner_adjustment = LevelSeams(
-        mesh,
-        chart_of_face,
-        two_face_edges,
-        [&](int face, const Eigen::Vector3d& b, Eigen::Vector3f* color) {
-          return BlendAt(face_sources(face), b, color);
-        },
-        SeamLevelingOptions(),
-        &report.seam_leveling);
-  }
-
-  // Projected corners of every face in its optimal image.
-  std::vector<std::array<Eigen::Vector2d, 3>> corners(num_faces);
-  for (int face = 0; face < num_faces; ++face) {
-    if (source[face] >= 0) {
-      ProjectFace(mesh, face, images[source[face]], corners[face].data());
-    }
-  }
+// Each chart scaled to the texel size (its pixels per metre from its faces'
+// areas in the source image and in the object) and packed; a larger texel
+// size when the atlas would exceed its largest side. Returns the atlas size
+// and sets the texel size used.
+cv::Size PackAtlas(const std::vector<std::array<Eigen::Vector2d, 3>>& corners,
+                   const std::vector<float>& source_area,
+                   const std::vector<double>& face_area,
+                   const TextureOptions& options,
+                   ChartLayout* layout,
+                   double* texel_size) {
+  std::vector<Chart>& charts = layout->charts;
   for (Chart& chart : charts) {
     double px = 0, m2 = 0;
     for (int face : chart.faces) {
@@ -808,10 +802,8 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     }
     chart.pixels_per_metre = m2 > 0 ? std::sqrt(px / m2) : 1.0;
   }
-  // Scale each chart to the texel size, pack; a larger texel size when the
-  // atlas would exceed its largest side.
+  Chart& unseen = layout->unseen;
   const int pad = options.padding_px;
-  cv::Size atlas_size;
   for (int attempt = 0;; ++attempt) {
     if (attempt == 30) {
       ThrowInputError("the atlas does not fit into --max_atlas_size ",
@@ -826,7 +818,7 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     // Chart sides in doubles first: a tiny --texel_size must not overflow.
     double largest_side = 0;
     for (Chart& chart : charts) {
-      const double scale = 1.0 / (texel_size * chart.pixels_per_metre);
+      const double scale = 1.0 / (*texel_size * chart.pixels_per_metre);
       chart.min = Eigen::Vector2d::Constant(1e300);
       chart.max = Eigen::Vector2d::Constant(-1e300);
       for (int face : chart.faces) {
@@ -838,7 +830,7 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       largest_side = std::max(largest_side, (chart.max - chart.min).maxCoeff());
     }
     if (largest_side + 2 * pad + 1 > options.max_atlas_size) {
-      texel_size *=
+      *texel_size *=
           1.02 * (largest_side + 2 * pad + 1) / options.max_atlas_size;
       continue;
     }
@@ -856,22 +848,27 @@ TexturedMesh MapTexture(const TriangleMesh& input,
     unseen.width = unseen.height =
         unseen.faces.empty() ? 0 : unseen_columns * kUnseenCell + 2 * pad;
     if (!unseen.faces.empty()) charts.push_back(unseen);
-    atlas_size = PackCharts(&charts);
+    const cv::Size atlas_size = PackCharts(&charts);
     if (!unseen.faces.empty()) {
       unseen = charts.back();
       charts.pop_back();
     }
     const int side = std::max(atlas_size.width, atlas_size.height);
-    if (side <= options.max_atlas_size) break;
-    texel_size *= 1.02 * side / options.max_atlas_size;
+    if (side <= options.max_atlas_size) return atlas_size;
+    *texel_size *= 1.02 * side / options.max_atlas_size;
   }
-  report.texel_size = texel_size;
-  report.atlas_width = atlas_size.width;
-  report.atlas_height = atlas_size.height;
+}
 
-  // Texture coordinates in atlas texels (x right, y down) per face corner.
-  std::vector<std::array<Eigen::Vector2d, 3>> texel(num_faces);
-  for (Chart& chart : charts) {
+// Texture coordinates in atlas texels (x right, y down) per face corner;
+// the unseen faces at the centres of their cells.
+std::vector<std::array<Eigen::Vector2d, 3>> AtlasTexels(
+    const ChartLayout& layout,
+    const std::vector<std::array<Eigen::Vector2d, 3>>& corners,
+    double texel_size,
+    int pad,
+    int unseen_columns) {
+  std::vector<std::array<Eigen::Vector2d, 3>> texel(corners.size());
+  for (const Chart& chart : layout.charts) {
     const double scale = 1.0 / (texel_size * chart.pixels_per_metre);
     const Eigen::Vector2d shift =
         chart.offset + Eigen::Vector2d::Constant(pad + 0.5) - chart.min;
@@ -881,111 +878,96 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       }
     }
   }
-  const int unseen_columns =
-      (unseen.width - 2 * pad) / std::max(1, kUnseenCell);
-  for (size_t i = 0; i < unseen.faces.size(); ++i) {
-    texel[unseen.faces[i]].fill(
-        UnseenCellCenter(unseen, pad, unseen_columns, i));
+  for (size_t i = 0; i < layout.unseen.faces.size(); ++i) {
+    texel[layout.unseen.faces[i]].fill(
+        UnseenCellCenter(layout.unseen, pad, unseen_columns, i));
   }
+  return texel;
+}
 
-  // 5. Fill the atlas, chart by chart in parallel (charts own disjoint
-  // rectangles). Each face first writes the texels whose centres lie inside
-  // it, then those within a texel outside its edges that are still empty,
-  // so that bilinear lookups at chart borders find texture, not background.
-  cv::Mat atlas(atlas_size, CV_8UC3, cv::Scalar::all(0));
-  cv::Mat covered(atlas_size, CV_8U, cv::Scalar(0));
-  if (!unseen.faces.empty()) {
-    const cv::Rect block(static_cast<int>(unseen.offset.x()),
-                         static_cast<int>(unseen.offset.y()),
-                         unseen.width,
-                         unseen.height);
-    atlas(block).setTo(cv::Scalar(
-        options.unseen_bgr[0], options.unseen_bgr[1], options.unseen_bgr[2]));
-    covered(block).setTo(255);
-  }
-  Progress progress("atlas", charts.size(), "charts");
-  ParallelFor(static_cast<int>(charts.size()), options.num_threads, [&](int c) {
-    const Chart& chart = charts[c];
-    for (int pass = 0; pass < 2; ++pass) {
-      for (int face : chart.faces) {
-        const auto& t = texel[face];
-        const Eigen::Vector2d e1 = t[1] - t[0], e2 = t[2] - t[0];
-        const double det = e1.x() * e2.y() - e1.y() * e2.x();
-        if (std::abs(det) < 1e-12) continue;
-        // Distance of a texel centre outside edge k, in texels, is
-        // -b_k * |det| / |edge opposite k|.
-        const double margin[3] = {
-            pass == 0 ? 0.0 : (t[2] - t[1]).norm() / std::abs(det),
-            pass == 0 ? 0.0 : (t[2] - t[0]).norm() / std::abs(det),
-            pass == 0 ? 0.0 : (t[1] - t[0]).norm() / std::abs(det)};
-        const std::vector<BlendSource> sources = face_sources(face);
-        const auto& adjust = corner_adjustment[face];
-        // Clamped to the chart's own rectangle: charts are filled in
-        // parallel and must not touch each other's texels.
-        const int cx0 = static_cast<int>(chart.offset.x());
-        const int cy0 = static_cast<int>(chart.offset.y());
-        const int x0 = std::max(
-            cx0,
-            static_cast<int>(
-                std::floor(std::min({t[0].x(), t[1].x(), t[2].x()}) - 1.0)));
-        const int y0 = std::max(
-            cy0,
-            static_cast<int>(
-                std::floor(std::min({t[0].y(), t[1].y(), t[2].y()}) - 1.0)));
-        const int x1 = std::min(
-            cx0 + chart.width - 1,
-            static_cast<int>(
-                std::ceil(std::max({t[0].x(), t[1].x(), t[2].x()}) + 1.0)));
-        const int y1 = std::min(
-            cy0 + chart.height - 1,
-            static_cast<int>(
-                std::ceil(std::max({t[0].y(), t[1].y(), t[2].y()}) + 1.0)));
-        for (int y = y0; y <= y1; ++y) {
-          for (int x = x0; x <= x1; ++x) {
-            const Eigen::Vector2d d = Eigen::Vector2d(x + 0.5, y + 0.5) - t[0];
-            const double b1 = (d.x() * e2.y() - d.y() * e2.x()) / det;
-            const double b2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
-            const double b0 = 1.0 - b1 - b2;
-            if (b0 < -margin[0] || b1 < -margin[1] || b2 < -margin[2]) {
-              continue;
-            }
-            uint8_t& mark = covered.at<uint8_t>(y, x);
-            if (pass == 1 && mark) continue;
-            Eigen::Vector3f color;
-            cv::Vec3b& out = atlas.at<cv::Vec3b>(y, x);
-            if (BlendAt(sources, Eigen::Vector3d(b0, b1, b2), &color)) {
-              color += float(b0) * adjust[0] + float(b1) * adjust[1] +
-                       float(b2) * adjust[2];
-              for (int ch = 0; ch < 3; ++ch) {
-                out[ch] = cv::saturate_cast<uint8_t>(color[ch]);
-              }
-            } else {
-              out = options.unseen_bgr;
-            }
-            mark = 255;
+// 5. One chart's texels (charts own disjoint rectangles, so that they fill
+// in parallel). Each face first writes the texels whose centres lie inside
+// it, then those within a texel outside its edges that are still empty, so
+// that bilinear lookups at chart borders find texture, not background.
+void FillChart(
+    const Chart& chart,
+    const std::vector<std::array<Eigen::Vector2d, 3>>& texel,
+    const std::function<std::vector<BlendSource>(int)>& face_sources,
+    const std::vector<std::array<Eigen::Vector3f, 3>>& corner_adjustment,
+    const TextureOptions& options,
+    cv::Mat* atlas,
+    cv::Mat* covered) {
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int face : chart.faces) {
+      const auto& t = texel[face];
+      const Eigen::Vector2d e1 = t[1] - t[0], e2 = t[2] - t[0];
+      const double det = e1.x() * e2.y() - e1.y() * e2.x();
+      if (std::abs(det) < 1e-12) continue;
+      // Distance of a texel centre outside edge k, in texels, is
+      // -b_k * |det| / |edge opposite k|.
+      const double margin[3] = {
+          pass == 0 ? 0.0 : (t[2] - t[1]).norm() / std::abs(det),
+          pass == 0 ? 0.0 : (t[2] - t[0]).norm() / std::abs(det),
+          pass == 0 ? 0.0 : (t[1] - t[0]).norm() / std::abs(det)};
+      const std::vector<BlendSource> sources = face_sources(face);
+      const auto& adjust = corner_adjustment[face];
+      // Clamped to the chart's own rectangle: charts are filled in parallel
+      // and must not touch each other's texels.
+      const int cx0 = static_cast<int>(chart.offset.x());
+      const int cy0 = static_cast<int>(chart.offset.y());
+      const int x0 = std::max(
+          cx0,
+          static_cast<int>(
+              std::floor(std::min({t[0].x(), t[1].x(), t[2].x()}) - 1.0)));
+      const int y0 = std::max(
+          cy0,
+          static_cast<int>(
+              std::floor(std::min({t[0].y(), t[1].y(), t[2].y()}) - 1.0)));
+      const int x1 = std::min(
+          cx0 + chart.width - 1,
+          static_cast<int>(
+              std::ceil(std::max({t[0].x(), t[1].x(), t[2].x()}) + 1.0)));
+      const int y1 = std::min(
+          cy0 + chart.height - 1,
+          static_cast<int>(
+              std::ceil(std::max({t[0].y(), t[1].y(), t[2].y()}) + 1.0)));
+      for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) {
+          const Eigen::Vector2d d = Eigen::Vector2d(x + 0.5, y + 0.5) - t[0];
+          const double b1 = (d.x() * e2.y() - d.y() * e2.x()) / det;
+          const double b2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
+          const double b0 = 1.0 - b1 - b2;
+          if (b0 < -margin[0] || b1 < -margin[1] || b2 < -margin[2]) {
+            continue;
           }
+          uint8_t& mark = covered->at<uint8_t>(y, x);
+          if (pass == 1 && mark) continue;
+          Eigen::Vector3f color;
+          cv::Vec3b& out = atlas->at<cv::Vec3b>(y, x);
+          if (BlendAt(sources, Eigen::Vector3d(b0, b1, b2), &color)) {
+            color += float(b0) * adjust[0] + float(b1) * adjust[1] +
+                     float(b2) * adjust[2];
+            for (int ch = 0; ch < 3; ++ch) {
+              out[ch] = cv::saturate_cast<uint8_t>(color[ch]);
+            }
+          } else {
+            out = options.unseen_bgr;
+          }
+          mark = 255;
         }
       }
     }
-    progress.Add();
-  });
-  progress.Finish();
-  ColorUnseenFaces(neighbors, texel, unseen, pad, unseen_columns, &atlas);
-  report.atlas_fill =
-      double(cv::countNonZero(covered)) / (double(atlas.cols) * atlas.rows);
-  DilateAtlas(pad, &atlas, &covered);
-
-  result.mesh.face_texcoords.resize(num_faces);
-  for (int face = 0; face < num_faces; ++face) {
-    for (int k = 0; k < 3; ++k) {
-      result.mesh.face_texcoords[face][k] = Eigen::Vector2f(
-          static_cast<float>(texel[face][k].x() / atlas.cols),
-          static_cast<float>(1.0 - texel[face][k].y() / atlas.rows));
-    }
   }
+}
 
-  // The seam measure: the atlas at each chart-border edge's midpoint, seen
-  // from both sides.
+// The seam measure: the atlas at each chart-border edge's midpoint, seen
+// from both sides; the mean absolute difference over the edges measured.
+double SeamDifference(const TriangleMesh& mesh,
+                      const std::vector<TwoFaceEdge>& two_face_edges,
+                      const std::vector<int>& source,
+                      const std::vector<std::array<Eigen::Vector2d, 3>>& texel,
+                      const cv::Mat& atlas,
+                      int* num_seam_edges) {
   double seam_sum = 0;
   for (const TwoFaceEdge& e : two_face_edges) {
     if (source[e.f] < 0 || source[e.g] < 0 || source[e.f] == source[e.g]) {
@@ -1005,10 +987,146 @@ TexturedMesh MapTexture(const TriangleMesh& input,
       continue;
     }
     seam_sum += (a - b).cwiseAbs().mean();
-    ++report.num_seam_edges;
+    ++*num_seam_edges;
   }
-  report.seam_difference =
-      report.num_seam_edges > 0 ? seam_sum / report.num_seam_edges : 0.0;
+  return *num_seam_edges > 0 ? seam_sum / *num_seam_edges : 0.0;
+}
+
+}  // namespace
+
+TexturedMesh MapTexture(const TriangleMesh& input,
+                        const std::vector<TextureImage>& images,
+                        const TextureOptions& options) {
+  options.Check();
+  if (input.NumFaces() == 0) ThrowInputError("the mesh has no faces");
+  if (images.empty()) ThrowInputError("no images to texture the mesh from");
+  TexturedMesh result;
+  result.mesh = input;
+  result.mesh.face_texcoords.clear();
+  const TriangleMesh& mesh = result.mesh;
+  TextureReport& report = result.report;
+  const int num_faces = static_cast<int>(mesh.NumFaces());
+  report.num_images = static_cast<int>(images.size());
+  report.num_faces = num_faces;
+
+  std::vector<cv::Mat> colors;
+  const std::vector<std::vector<FaceView>> views =
+      FindFaceViews(mesh, images, options, &colors, &report);
+  const Timer timer;
+  std::vector<int> best;
+  std::vector<float> best_area;
+  ChooseOptimalImages(views, &best, &best_area, &report);
+  const std::vector<EdgeFace> edges = SortedEdges(mesh);
+  const std::vector<TwoFaceEdge> two_face_edges = TwoFaceEdges(edges);
+  const std::vector<std::array<int, 3>> neighbors =
+      FaceNeighbors(two_face_edges, num_faces);
+  std::vector<int> source = best;
+  std::vector<float> source_area = best_area;
+  MergeSpeckle(neighbors, views, best_area, options, &source, &source_area);
+  for (int face = 0; face < num_faces; ++face) {
+    if (source[face] >= 0) ++report.faces_per_image[images[source[face]].name];
+  }
+  std::vector<double> face_area(num_faces);
+  for (int face = 0; face < num_faces; ++face) {
+    face_area[face] = TriangleArea3(mesh, face);
+  }
+  double texel_size = options.texel_size > 0
+                          ? options.texel_size
+                          : MedianTexelSize(face_area, source, source_area);
+  ChartLayout layout = BuildCharts(edges, source);
+  report.num_charts = static_cast<int>(layout.charts.size());
+
+  // 6. Seam levelling: corner adjustments from the colours the faces would
+  // take on both sides of each chart border.
+  const auto face_sources = [&](int face) {
+    return BlendSources(mesh,
+                        face,
+                        views[face],
+                        source[face],
+                        best_area[face],
+                        images,
+                        colors,
+                        options);
+  };
+  std::vector<std::array<Eigen::Vector3f, 3>> corner_adjustment(
+      num_faces,
+      {Eigen::Vector3f::Zero(),
+       Eigen::Vector3f::Zero(),
+       Eigen::Vector3f::Zero()});
+  if (options.seam_leveling) {
+    corner_adjustment = LevelSeams(
+        mesh,
+        layout.chart_of_face,
+        two_face_edges,
+        [&](int face, const Eigen::Vector3d& b, Eigen::Vector3f* color) {
+          return BlendAt(face_sources(face), b, color);
+        },
+        SeamLevelingOptions(),
+        &report.seam_leveling);
+  }
+
+  // Projected corners of every face in its source image; the charts packed
+  // into the atlas, and each corner's place in it.
+  std::vector<std::array<Eigen::Vector2d, 3>> corners(num_faces);
+  for (int face = 0; face < num_faces; ++face) {
+    if (source[face] >= 0) {
+      ProjectFace(mesh, face, images[source[face]], corners[face].data());
+    }
+  }
+  const cv::Size atlas_size =
+      PackAtlas(corners, source_area, face_area, options, &layout, &texel_size);
+  report.texel_size = texel_size;
+  report.atlas_width = atlas_size.width;
+  report.atlas_height = atlas_size.height;
+
+  const int pad = options.padding_px;
+  const Chart& unseen = layout.unseen;
+  const int unseen_columns =
+      (unseen.width - 2 * pad) / std::max(1, kUnseenCell);
+  const std::vector<std::array<Eigen::Vector2d, 3>> texel =
+      AtlasTexels(layout, corners, texel_size, pad, unseen_columns);
+
+  // The atlas, chart by chart in parallel; the unseen faces' block, then
+  // their colours from their neighbours.
+  cv::Mat atlas(atlas_size, CV_8UC3, cv::Scalar::all(0));
+  cv::Mat covered(atlas_size, CV_8U, cv::Scalar(0));
+  if (!unseen.faces.empty()) {
+    const cv::Rect block(static_cast<int>(unseen.offset.x()),
+                         static_cast<int>(unseen.offset.y()),
+                         unseen.width,
+                         unseen.height);
+    atlas(block).setTo(cv::Scalar(
+        options.unseen_bgr[0], options.unseen_bgr[1], options.unseen_bgr[2]));
+    covered(block).setTo(255);
+  }
+  Progress progress("atlas", layout.charts.size(), "charts");
+  ParallelFor(
+      static_cast<int>(layout.charts.size()), options.num_threads, [&](int c) {
+        FillChart(layout.charts[c],
+                  texel,
+                  face_sources,
+                  corner_adjustment,
+                  options,
+                  &atlas,
+                  &covered);
+        progress.Add();
+      });
+  progress.Finish();
+  ColorUnseenFaces(neighbors, texel, unseen, pad, unseen_columns, &atlas);
+  report.atlas_fill =
+      double(cv::countNonZero(covered)) / (double(atlas.cols) * atlas.rows);
+  DilateAtlas(pad, &atlas, &covered);
+
+  result.mesh.face_texcoords.resize(num_faces);
+  for (int face = 0; face < num_faces; ++face) {
+    for (int k = 0; k < 3; ++k) {
+      result.mesh.face_texcoords[face][k] = Eigen::Vector2f(
+          static_cast<float>(texel[face][k].x() / atlas.cols),
+          static_cast<float>(1.0 - texel[face][k].y() / atlas.rows));
+    }
+  }
+  report.seam_difference = SeamDifference(
+      mesh, two_face_edges, source, texel, atlas, &report.num_seam_edges);
   report.seconds_atlas = timer.Seconds();
   result.atlas = atlas;
   return result;
