@@ -407,7 +407,8 @@ void ExpectBadInputRefused(const std::string& mode) {
 
   std::vector<std::string> bad_option = args;
   bad_option.insert(bad_option.end(), {"--cell_size", "0"});
-  ExpectRefused(ws, bad_option, "--cell_size");
+  // Named as the option is registered (and the flag, less its dashes).
+  ExpectRefused(ws, bad_option, "cell_size must be >= 1 (got 0)");
 
   // Output that exists is not replaced without --overwrite.
   fs::create_directories(ws + "/dense");

@@ -6,6 +6,7 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <iostream>
 #include <mutex>
 #include <sstream>
+#include <type_traits>
 
 namespace fs = std::filesystem;
 
@@ -54,6 +56,11 @@ CommandLine::CommandLine(const std::string& command,
     : command_(command), app_(description, "bayon " + command) {
   app_.set_config("--config", "", "Read options from an INI or TOML file")
       ->check(CLI::ExistingFile);
+  // Keys are option names, dotted ones included (mpgc.lsm.patch_radius):
+  // a dot does not open a section.
+  auto config = std::make_shared<CLI::ConfigINI>();
+  config->parentSeparator('\x1f');
+  app_.config_formatter(config);
   // A key the command does not know is a typo, not something to ignore.
   app_.allow_config_extras(CLI::config_extras_mode::error);
   app_.get_formatter()->column_width(40);
@@ -94,7 +101,99 @@ void CommandLine::StartLog(const std::string& log_path) {
 }
 
 std::string CommandLine::EffectiveOptions() const {
-  return app_.config_to_str(true, false);
+  // Each field once, under its name: an earlier name's line would carry its
+  // default back over the value given.
+  std::istringstream lines(app_.config_to_str(true, false));
+  std::string options;
+  for (std::string line; std::getline(lines, line);) {
+    const std::string key = line.substr(0, line.find('='));
+    if (std::find(earlier_names_.begin(), earlier_names_.end(), key) !=
+        earlier_names_.end()) {
+      continue;
+    }
+    options += line + "\n";
+  }
+  return options;
+}
+
+void CommandLine::NoteEarlierNames(
+    const std::map<std::string, std::string>& legacy) {
+  for (const auto& [old_name, name] : legacy) {
+    earlier_names_.push_back(old_name);
+  }
+}
+
+CliOptionRegistry::CliOptionRegistry(
+    CLI::App* app, const std::map<std::string, std::string>& legacy)
+    : app_(app), legacy_(legacy) {}
+
+std::vector<std::string> CliOptionRegistry::LegacyNames(
+    const std::string& name) const {
+  std::vector<std::string> names;
+  for (const auto& [old_name, new_name] : legacy_) {
+    if (new_name == name) names.push_back(old_name);
+  }
+  return names;
+}
+
+template <typename T>
+void CliOptionRegistry::AddOption(const std::string& name,
+                                  T* value,
+                                  const std::string& help) {
+  CLI::Option* option = app_->add_option("--" + name, *value, help);
+  if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+    option->delimiter(',');
+  }
+  for (const std::string& old_name : LegacyNames(name)) {
+    CLI::Option* hidden = app_->add_option("--" + old_name, *value, help);
+    hidden->group("");
+    if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+      hidden->delimiter(',');
+    }
+  }
+}
+
+void CliOptionRegistry::Add(const std::string& name,
+                            bool* value,
+                            const std::string& help) {
+  AddOption(name, value, help);
+}
+
+void CliOptionRegistry::Add(const std::string& name,
+                            int* value,
+                            const std::string& help) {
+  AddOption(name, value, help);
+}
+
+void CliOptionRegistry::Add(const std::string& name,
+                            double* value,
+                            const std::string& help) {
+  AddOption(name, value, help);
+}
+
+void CliOptionRegistry::Add(const std::string& name,
+                            std::string* value,
+                            const std::string& help) {
+  AddOption(name, value, help);
+}
+
+void CliOptionRegistry::Add(const std::string& name,
+                            std::vector<std::string>* value,
+                            const std::string& help) {
+  AddOption(name, value, help);
+}
+
+void CliOptionRegistry::AddChoice(const std::string& name,
+                                  const Choice& choice,
+                                  const std::string& help) {
+  std::vector<std::string> names = LegacyNames(name);
+  names.insert(names.begin(), name);
+  for (size_t k = 0; k < names.size(); ++k) {
+    CLI::Option* option = app_->add_option_function<std::string>(
+        "--" + names[k], choice.set, help);
+    option->check(CLI::IsMember(choice.names))->default_str(choice.get());
+    if (k > 0) option->group("");
+  }
 }
 
 std::string WorkspaceLogPath(const std::string& workspace,

@@ -6,10 +6,13 @@
 // parse, check, call one ext/ function, write, summarise.
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 #include <glog/logging.h>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,6 +25,19 @@ class CommandLine {
 
   CLI::App& app() { return app_; }
   const std::string& command() const { return command_; }
+
+  // The fields an options struct registers (option_registry.h), as
+  // --field or --nested.field. `legacy` maps a flag name of earlier
+  // releases (without the dashes) to the field's registered name: it stays
+  // accepted, on the command line and in configs, but is not listed.
+  template <typename Options>
+  void AddOptions(Options* options,
+                  const std::map<std::string, std::string>& legacy = {});
+  // The same for a nested struct on its own, as --prefix.field.
+  template <typename Options>
+  void AddOptions(const std::string& prefix,
+                  Options* options,
+                  const std::map<std::string, std::string>& legacy = {});
 
   // Parses argv (argv[0] is the command name). Returns false when help was
   // asked for and printed (the command then returns 0). Other CLI11 errors
@@ -45,10 +61,67 @@ class CommandLine {
   void PrintSummary(const std::string& text) const;
 
  private:
+  // Adds the legacy names to those EffectiveOptions leaves out.
+  void NoteEarlierNames(const std::map<std::string, std::string>& legacy);
+
   std::string command_;
   CLI::App app_;
   std::shared_ptr<google::LogSink> log_sink_;
+  std::vector<std::string> earlier_names_;  // accepted, not written out
 };
+
+// An OptionRegistry that puts every field on a CLI11 command line.
+class CliOptionRegistry : public OptionRegistry {
+ public:
+  CliOptionRegistry(CLI::App* app,
+                    const std::map<std::string, std::string>& legacy);
+  void Add(const std::string& name,
+           bool* value,
+           const std::string& help) override;
+  void Add(const std::string& name,
+           int* value,
+           const std::string& help) override;
+  void Add(const std::string& name,
+           double* value,
+           const std::string& help) override;
+  void Add(const std::string& name,
+           std::string* value,
+           const std::string& help) override;
+  void Add(const std::string& name,
+           std::vector<std::string>* value,
+           const std::string& help) override;
+
+ protected:
+  void AddChoice(const std::string& name,
+                 const Choice& choice,
+                 const std::string& help) override;
+
+ private:
+  // The option as --name, and hidden under each legacy name of it.
+  template <typename T>
+  void AddOption(const std::string& name, T* value, const std::string& help);
+  std::vector<std::string> LegacyNames(const std::string& name) const;
+
+  CLI::App* app_;
+  std::map<std::string, std::string> legacy_;  // old name -> name
+};
+
+template <typename Options>
+void CommandLine::AddOptions(Options* options,
+                             const std::map<std::string, std::string>& legacy) {
+  CliOptionRegistry registry(&app_, legacy);
+  options->Register(&registry);
+  NoteEarlierNames(legacy);
+}
+
+template <typename Options>
+void CommandLine::AddOptions(const std::string& prefix,
+                             Options* options,
+                             const std::map<std::string, std::string>& legacy) {
+  CliOptionRegistry registry(&app_, legacy);
+  registry.AddNested(prefix, options);
+  NoteEarlierNames(legacy);
+}
 
 // For commands on a workspace: <workspace>/logs/<command>.log, creating the
 // folder; empty when workspace is empty.

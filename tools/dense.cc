@@ -20,13 +20,44 @@
 namespace fs = std::filesystem;
 
 namespace bayon {
+namespace {
+
+// The flags of the nested options before they took their dotted names,
+// still accepted (configs, scripts): old name -> name.
+const std::map<std::string, std::string> kFlagsBefore = {
+    {"patch_match_window_radius", "patch_match.window_radius"},
+    {"patch_match_window_step", "patch_match.window_step"},
+    {"patch_match_iterations", "patch_match.num_iterations"},
+    {"patch_match_levels", "patch_match.num_levels"},
+    {"patch_match_candidates", "patch_match.num_propagation_candidates"},
+    {"patch_match_best_views", "patch_match.best_views"},
+    {"edge_margin_px", "fusion.edge_margin_px"},
+    {"min_consistent_views", "fusion.min_consistent_views"},
+    {"max_depth_error_px", "fusion.max_depth_error_px"},
+    {"max_normal_error_deg", "fusion.max_normal_error_deg"},
+    {"max_cost", "fusion.max_cost"},
+    {"window_radius", "search.window_radius"},
+    {"search_step_px", "search.step_px"},
+    {"search_stride", "search.stride"},
+    {"min_ncc", "search.min_ncc"},
+    {"best_views", "search.best_views"},
+    {"patch_radius", "mpgc.lsm.patch_radius"},
+    {"min_template_stddev", "mpgc.lsm.min_template_stddev"},
+    {"min_correlation", "mpgc.min_correlation"},
+    {"min_search_views", "mpgc.min_search_views"},
+    {"geometric_sigma_px", "mpgc.geometric_sigma_px"},
+    {"convergence_px", "mpgc.convergence_px"},
+    {"convergence_sigma", "mpgc.convergence_sigma"},
+    {"max_iterations", "mpgc.max_iterations"},
+    {"max_shift_px", "mpgc.max_shift_px"}};
+
+}  // namespace
 
 int RunDense(int argc, char** argv) {
   OrientedInput in;
   std::string output_path, fused_path, report_path, log_path;
   bool overwrite = false;
   DenseOptions options;
-  std::string mode = "multiview";
   CommandLine command(
       "dense",
       "Dense surface points by multi-photo geometrically constrained "
@@ -50,188 +81,7 @@ int RunDense(int argc, char** argv) {
   app.add_option("--report_path",
                  report_path,
                  "Report as JSON (default: --output_path with .json)");
-  app.add_option("--mode", mode, "multiview (depth maps) or paper")
-      ->transform(CLI::IsMember({"multiview", "paper"}));
-  app.add_option("--max_image_size",
-                 options.max_image_size,
-                 "multiview: depth maps of the photographs shrunk by a whole "
-                 "factor to this longer side at most, px");
-  app.add_option("--num_source_views",
-                 options.num_source_views,
-                 "multiview: source views per master (smallest angle at "
-                 "what it looks at, from --min_triangulation_angle_deg)");
-  app.add_option("--min_triangulation_angle_deg",
-                 options.min_triangulation_angle_deg,
-                 "multiview: smallest angle between master and source rays");
-  app.add_option("--patch_match_window_radius",
-                 options.patch_match.window_radius,
-                 "multiview: correlation window radius, depth-map px");
-  app.add_option("--patch_match_window_step",
-                 options.patch_match.window_step,
-                 "multiview: every n-th pixel of the window");
-  app.add_option("--patch_match_iterations",
-                 options.patch_match.num_iterations,
-                 "multiview: red-black propagation iterations per level");
-  app.add_option("--patch_match_levels",
-                 options.patch_match.num_levels,
-                 "multiview: coarse-to-fine levels of halved size (1: the "
-                 "working size alone), each level's planes starting the next");
-  app.add_option("--patch_match_candidates",
-                 options.patch_match.num_propagation_candidates,
-                 "multiview: neighbours' planes scored per pixel (the "
-                 "best-matched of 8)");
-  app.add_option("--patch_match_best_views",
-                 options.patch_match.best_views,
-                 "multiview: a plane's cost over its best n views");
-  app.add_option("--edge_margin_px",
-                 options.fusion.edge_margin_px,
-                 "multiview: depth-map pixels this near an area without "
-                 "depth are not fused (against edge fattening; 0: off)");
-  app.add_option("--min_consistent_views",
-                 options.fusion.min_consistent_views,
-                 "multiview: other depth maps that must agree with a pixel");
-  app.add_option("--max_depth_error_px",
-                 options.fusion.max_depth_error_px,
-                 "multiview: agreement in depth, pixel footprints (depth / "
-                 "focal length) of the depth map compared with");
-  app.add_option("--max_normal_error_deg",
-                 options.fusion.max_normal_error_deg,
-                 "multiview: agreement in normal, degrees");
-  app.add_option("--max_cost",
-                 options.fusion.max_cost,
-                 "multiview: largest matching cost (1 - NCC) fused");
-  app.add_option("--add_unmodelled_sigma",
-                 options.add_unmodelled_sigma,
-                 "Add the errors MPGC's model leaves out, estimated from the "
-                 "cloud's scatter about its local surface, to the points' "
-                 "sigmas in quadrature");
-  app.add_option("--refine",
-                 options.refine,
-                 "multiview: MPGC for every fused point (0: the fused points, "
-                 "without covariance)");
-  app.add_option("--max_refine_shift_gsd",
-                 options.max_refine_shift_gsd,
-                 "multiview: reject points MPGC moves further, depth-map "
-                 "GSDs");
-  app.add_option("--highpass_sigma_px",
-                 options.highpass_sigma_px,
-                 "Matching on grey values minus their Gaussian blur of this "
-                 "sigma, px (0 = off): different light between photographs");
-  app.add_option("--num_masters",
-                 options.num_masters,
-                 "Master images (0: every one, multiview; 5, paper)");
-  app.add_option("--master_names",
-                 options.master_names,
-                 "Master images by name, comma-separated (overrides "
-                 "--num_masters)")
-      ->delimiter(',');
-  app.add_option("--num_search_images",
-                 options.num_search_images,
-                 "Search images per master (nearest viewing directions)");
-  app.add_option("--max_search_angle_deg",
-                 options.max_search_angle_deg,
-                 "Largest angle between master and search directions");
-  app.add_option("--cell_size",
-                 options.cell_size,
-                 "Dense pattern: one Moravec point per cell of this side, px");
-  app.add_option("--min_interest",
-                 options.min_interest,
-                 "Smallest Moravec interest of a cell's point");
-  app.add_option("--coarse_step",
-                 options.coarse_step,
-                 "Coarse cells (full depth range): every n-th in x and y");
-  app.add_option("--band_tolerance",
-                 options.band_tolerance,
-                 "Band beyond the coarse points' depths, share of the depth");
-  app.add_option("--band_radius_cells",
-                 options.band_radius_cells,
-                 "Coarse cells around a cell that bound its band");
-  app.add_option("--min_depth",
-                 options.min_depth,
-                 "Depth range when the model has too few sparse points");
-  app.add_option("--max_depth", options.max_depth, "(see --min_depth)");
-  app.add_option("--depth_margin",
-                 options.depth_margin,
-                 "Widening of the sparse points' depth range, share");
-  app.add_option("--window_radius",
-                 options.search.window_radius,
-                 "Correlation window along the ray: radius, px");
-  app.add_option("--search_step_px",
-                 options.search.step_px,
-                 "Approximations: largest epipolar step between ray samples");
-  app.add_option("--search_stride",
-                 options.search.stride,
-                 "Approximations: every n-th ray sample first, then around "
-                 "the best peaks (1: every sample)");
-  app.add_option("--min_ncc",
-                 options.search.min_ncc,
-                 "Smallest mean correlation of an approximation");
-  app.add_option("--min_peak_margin",
-                 options.min_peak_margin,
-                 "Approximations: best minus second peak along the ray");
-  app.add_option("--min_view_ncc",
-                 options.min_view_ncc,
-                 "Views correlating less at the approximation stay out of "
-                 "the point's MPGC");
-  app.add_option("--num_ray_views",
-                 options.num_ray_views,
-                 "Approximations: search in the nearest n search images");
-  app.add_option("--best_views",
-                 options.search.best_views,
-                 "Approximations: score of the best n views (0 = all)");
-  app.add_option(
-      "--patch_radius", options.mpgc.lsm.patch_radius, "MPGC patch radius, px");
-  app.add_option("--min_template_stddev",
-                 options.mpgc.lsm.min_template_stddev,
-                 "paper: MPGC matches master patches with this contrast at "
-                 "least (flat_patch), grey values");
-  app.add_option("--refine_min_template_stddev",
-                 options.refine_min_template_stddev,
-                 "multiview: the same for the refinement of fused points");
-  app.add_option("--min_correlation",
-                 options.mpgc.min_correlation,
-                 "MPGC: search patches correlating less are dropped");
-  app.add_option("--min_search_views",
-                 options.mpgc.min_search_views,
-                 "MPGC: fewest search images a point keeps");
-  app.add_option("--geometric_sigma_px",
-                 options.mpgc.geometric_sigma_px,
-                 "MPGC: a priori sigma of the collinearity conditions, px");
-  app.add_option("--convergence_px",
-                 options.mpgc.convergence_px,
-                 "MPGC: converged when no patch centre moves more, px");
-  app.add_option("--convergence_sigma",
-                 options.mpgc.convergence_sigma,
-                 "MPGC: converged also when a step moves the solution by "
-                 "less than this many standard deviations (0: off)");
-  app.add_option("--max_iterations",
-                 options.mpgc.max_iterations,
-                 "MPGC: most iterations per solution");
-  app.add_option("--max_shift_px",
-                 options.mpgc.max_shift_px,
-                 "MPGC: largest move of a patch from its approximation");
-  app.add_option("--max_sigma_gsd",
-                 options.max_sigma_gsd,
-                 "Reject points with a larger sigma along the master ray, "
-                 "in ground sampling distances");
-  app.add_option("--off_surface_gsd",
-                 options.off_surface_gsd,
-                 "Reject points off the plane of their neighbours by more "
-                 "than this many GSDs");
-  app.add_option("--min_neighbors",
-                 options.min_neighbors,
-                 "Reject points with fewer accepted neighbours (isolated)");
-  app.add_option("--surface_radius_cells",
-                 options.surface_radius_cells,
-                 "Neighbours of the off-surface test: cells around");
-  app.add_option("--max_growth_passes",
-                 options.max_growth_passes,
-                 "Region growing: passes of MPGC from the surface of the "
-                 "accepted neighbours (0 = off)");
-  app.add_option("--growth_min_search_views",
-                 options.growth_min_search_views,
-                 "Region growing: search images a grown point needs");
-  app.add_option("--num_threads", options.num_threads, "-1 = all cores");
+  command.AddOptions(&options, kFlagsBefore);
   app.add_option("--overwrite", overwrite, "Replace existing output files");
   app.add_option(
       "--log_path", log_path, "Log file (default <workspace>/logs/dense.log)");
@@ -244,7 +94,6 @@ int RunDense(int argc, char** argv) {
         "give --workspace_path, or --image_path, --input_path and "
         "--output_path");
   }
-  options.mode = mode == "paper" ? DenseMode::kPaper : DenseMode::kMultiView;
   options.Check();
   in.Check();
   const fs::path output_folder = fs::absolute(output_path).parent_path();

@@ -15,8 +15,6 @@ int RunRefineKeypoints(int argc, char** argv) {
   std::string database_path, image_path, output_path, report_path, log_path;
   bool overwrite = false;
   KeypointRefinementOptions options;
-  LsmOptions& lsm = options.lsm;
-  std::string interpolation = InterpolationName(lsm.interpolation);
   CommandLine command(
       "refine_keypoints",
       "Least-squares refinement of the matched keypoints of a COLMAP "
@@ -36,46 +34,17 @@ int RunRefineKeypoints(int argc, char** argv) {
   app.add_option("--output_path", output_path, "The refined database to write")
       ->required();
   app.add_option("--overwrite", overwrite, "1: replace an existing output");
-  app.add_option(
-      "--patch_radius", lsm.patch_radius, "Half side of the patches, pixels");
-  app.add_option("--interpolation", interpolation, "bilinear or bicubic")
-      ->transform(CLI::IsMember({"bilinear", "bicubic"}));
-  app.add_option("--estimate_shape",
-                 lsm.estimate_shape,
-                 "1: affine patch shape; 0: shifts only");
-  app.add_option("--use_keypoint_shape",
-                 options.use_keypoint_shape,
-                 "1: start from the keypoints' affine frames");
-  app.add_option("--max_iterations", lsm.max_iterations, "LSM iterations");
-  app.add_option(
-      "--max_sigma0", options.max_sigma0, "Largest sigma0, grey values");
-  app.add_option("--min_correlation",
-                 options.min_correlation,
-                 "Smallest correlation of the matched patches");
-  app.add_option("--max_sigma_px",
-                 options.max_sigma_px,
-                 "Largest standard deviation of a shift, pixels");
-  app.add_option("--max_shift_px",
-                 options.max_shift_px,
-                 "Largest move from the keypoint, pixels");
-  app.add_option("--back_matching",
-                 options.back_matching,
-                 "1: match back into the reference image");
-  app.add_option("--max_backmatch_px",
-                 options.max_backmatch_px,
-                 "Largest back-matching miss, pixels");
-  app.add_option("--max_track_length",
-                 options.max_track_length,
-                 "Longer tracks are left alone");
-  app.add_option(
-      "--num_threads", options.num_threads, "Threads (-1 = all cores)");
+  command.AddOptions(&options,
+                     {{"patch_radius", "lsm.patch_radius"},
+                      {"interpolation", "lsm.interpolation"},
+                      {"estimate_shape", "lsm.estimate_shape"},
+                      {"max_iterations", "lsm.max_iterations"}});
   app.add_option("--report_path", report_path, "Write the summary as JSON");
   app.add_option(
       "--log_path",
       log_path,
       "Log file (default <output folder>/logs/refine_keypoints.log)");
   if (!command.Parse(argc, argv)) return 0;
-  lsm.interpolation = ParseInterpolation(interpolation);
   options.Check();
   CheckFileExists(database_path, "--database_path");
   CheckDirectoryExists(image_path, "--image_path");

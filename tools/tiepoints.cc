@@ -16,7 +16,6 @@ int RunTiePoints(int argc, char** argv) {
       log_path;
   bool overwrite = false;
   TiePointOptions options;
-  KeypointRefinementOptions& matching = options.matching;
   CommandLine command(
       "tiepoints",
       "Automatic multi-image tie points: interest points spread over every "
@@ -83,23 +82,14 @@ int RunTiePoints(int argc, char** argv) {
   app.add_option("--min_distance_px",
                  options.min_distance_px,
                  "Points closer than this in an image are one");
-  app.add_option("--patch_radius",
-                 matching.lsm.patch_radius,
-                 "Half side of the least-squares patches, pixels");
-  app.add_option(
-      "--max_sigma0", matching.max_sigma0, "Largest sigma0, grey values");
-  app.add_option("--min_correlation",
-                 matching.min_correlation,
-                 "Smallest correlation after least-squares matching");
-  app.add_option("--max_sigma_px",
-                 matching.max_sigma_px,
-                 "Largest standard deviation of a shift, pixels");
-  app.add_option("--max_shift_px",
-                 matching.max_shift_px,
-                 "Largest move from the correlation peak, pixels");
-  app.add_option("--max_backmatch_px",
-                 matching.max_backmatch_px,
-                 "Largest back-matching miss, pixels");
+  command.AddOptions("matching",
+                     &options.matching,
+                     {{"patch_radius", "matching.lsm.patch_radius"},
+                      {"max_sigma0", "matching.max_sigma0"},
+                      {"min_correlation", "matching.min_correlation"},
+                      {"max_sigma_px", "matching.max_sigma_px"},
+                      {"max_shift_px", "matching.max_shift_px"},
+                      {"max_backmatch_px", "matching.max_backmatch_px"}});
   app.add_option(
       "--num_threads", options.num_threads, "Threads (-1 = all cores)");
   app.add_option("--report_path", report_path, "Write the summary as JSON");

@@ -52,71 +52,187 @@ DenseOptions::DenseOptions() {
 
 void DenseOptions::Check() const {
   CheckOption(
-      highpass_sigma_px >= 0, "--highpass_sigma_px", ">= 0", highpass_sigma_px);
-  CheckOption(num_masters >= 0, "--num_masters", ">= 0", num_masters);
-  CheckOption(
-      max_image_size >= 16, "--max_image_size", ">= 16", max_image_size);
+      highpass_sigma_px >= 0, "highpass_sigma_px", ">= 0", highpass_sigma_px);
+  CheckOption(num_masters >= 0, "num_masters", ">= 0", num_masters);
+  CheckOption(max_image_size >= 16, "max_image_size", ">= 16", max_image_size);
   CheckOption(num_source_views >= 1 && num_source_views <= 32,
-              "--num_source_views",
+              "num_source_views",
               "in [1, 32]",
               num_source_views);
   CheckOption(
       min_triangulation_angle_deg >= 0 && min_triangulation_angle_deg < 90,
-      "--min_triangulation_angle_deg",
+      "min_triangulation_angle_deg",
       "in [0, 90)",
       min_triangulation_angle_deg);
   CheckOption(refine_min_template_stddev >= 0,
-              "--refine_min_template_stddev",
+              "refine_min_template_stddev",
               ">= 0",
               refine_min_template_stddev);
   CheckOption(max_refine_shift_gsd > 0,
-              "--max_refine_shift_gsd",
+              "max_refine_shift_gsd",
               "> 0",
               max_refine_shift_gsd);
-  patch_match.Check();
-  fusion.Check();
+  CheckNested("patch_match", patch_match);
+  CheckNested("fusion", fusion);
   CheckOption(
-      num_search_images >= 1, "--num_search_images", ">= 1", num_search_images);
+      num_search_images >= 1, "num_search_images", ">= 1", num_search_images);
   CheckOption(max_search_angle_deg > 0 && max_search_angle_deg < 180,
-              "--max_search_angle_deg",
+              "max_search_angle_deg",
               "in (0, 180)",
               max_search_angle_deg);
-  CheckOption(cell_size >= 1, "--cell_size", ">= 1", cell_size);
+  CheckOption(cell_size >= 1, "cell_size", ">= 1", cell_size);
   CheckOption(moravec_window >= 3 && moravec_window % 2 == 1,
-              "--moravec_window",
+              "moravec_window",
               "odd and >= 3",
               moravec_window);
-  CheckOption(min_interest >= 0, "--min_interest", ">= 0", min_interest);
-  CheckOption(coarse_step >= 1, "--coarse_step", ">= 1", coarse_step);
-  CheckOption(band_tolerance >= 0, "--band_tolerance", ">= 0", band_tolerance);
+  CheckOption(min_interest >= 0, "min_interest", ">= 0", min_interest);
+  CheckOption(coarse_step >= 1, "coarse_step", ">= 1", coarse_step);
+  CheckOption(band_tolerance >= 0, "band_tolerance", ">= 0", band_tolerance);
   CheckOption(
-      band_radius_cells >= 1, "--band_radius_cells", ">= 1", band_radius_cells);
+      band_radius_cells >= 1, "band_radius_cells", ">= 1", band_radius_cells);
   CheckOption(min_depth >= 0 && max_depth >= 0 &&
                   (max_depth == 0 || max_depth > min_depth),
-              "--max_depth",
-              "0 (from the sparse points) or > --min_depth >= 0",
+              "max_depth",
+              "0 (from the sparse points) or > min_depth >= 0",
               max_depth);
-  CheckOption(depth_margin >= 0, "--depth_margin", ">= 0", depth_margin);
+  CheckOption(depth_margin >= 0, "depth_margin", ">= 0", depth_margin);
   CheckOption(
-      sparse_radius_px > 0, "--sparse_radius_px", "> 0", sparse_radius_px);
+      sparse_radius_px > 0, "sparse_radius_px", "> 0", sparse_radius_px);
   CheckOption(
-      sparse_tolerance >= 0, "--sparse_tolerance", ">= 0", sparse_tolerance);
-  CheckOption(max_sigma_gsd > 0, "--max_sigma_gsd", "> 0", max_sigma_gsd);
-  CheckOption(
-      min_peak_margin >= 0, "--min_peak_margin", ">= 0", min_peak_margin);
+      sparse_tolerance >= 0, "sparse_tolerance", ">= 0", sparse_tolerance);
+  CheckOption(max_sigma_gsd > 0, "max_sigma_gsd", "> 0", max_sigma_gsd);
+  CheckOption(min_peak_margin >= 0, "min_peak_margin", ">= 0", min_peak_margin);
   CheckOption(min_view_ncc > -1 && min_view_ncc < 1,
-              "--min_view_ncc",
+              "min_view_ncc",
               "in (-1, 1)",
               min_view_ncc);
   CheckOption(surface_radius_cells >= 1,
-              "--surface_radius_cells",
+              "surface_radius_cells",
               ">= 1",
               surface_radius_cells);
-  CheckOption(off_surface_gsd > 0, "--off_surface_gsd", "> 0", off_surface_gsd);
+  CheckOption(off_surface_gsd > 0, "off_surface_gsd", "> 0", off_surface_gsd);
   CheckOption(
-      max_growth_passes >= 0, "--max_growth_passes", ">= 0", max_growth_passes);
-  search.Check();
-  mpgc.Check();
+      max_growth_passes >= 0, "max_growth_passes", ">= 0", max_growth_passes);
+  CheckNested("search", search);
+  CheckNested("mpgc", mpgc);
+}
+
+void DenseOptions::Register(OptionRegistry* r) {
+  r->AddChoice(
+      "mode",
+      &mode,
+      {{"multiview", DenseMode::kMultiView}, {"paper", DenseMode::kPaper}},
+      "multiview (depth maps) or paper");
+  r->Add("highpass_sigma_px",
+         &highpass_sigma_px,
+         "Matching on grey values minus their Gaussian blur of this sigma, px "
+         "(0 = off): different light between photographs");
+  r->Add("num_masters",
+         &num_masters,
+         "Master images (0: every one, multiview; 5, paper)");
+  r->Add("master_names",
+         &master_names,
+         "Master images by name, comma-separated (overrides num_masters)");
+  r->Add("max_image_size",
+         &max_image_size,
+         "multiview: depth maps of the photographs shrunk by a whole factor "
+         "to this longer side at most, px");
+  r->Add("num_source_views",
+         &num_source_views,
+         "multiview: source views per master (smallest angle at what it "
+         "looks at, from min_triangulation_angle_deg)");
+  r->Add("min_triangulation_angle_deg",
+         &min_triangulation_angle_deg,
+         "multiview: smallest angle between master and source rays");
+  r->AddNested("patch_match", &patch_match);
+  r->AddNested("fusion", &fusion);
+  r->Add("refine",
+         &refine,
+         "multiview: MPGC for every fused point (0: the fused points, "
+         "without covariance)");
+  r->Add("max_refine_shift_gsd",
+         &max_refine_shift_gsd,
+         "multiview: reject points MPGC moves further, depth-map GSDs");
+  r->Add("refine_min_template_stddev",
+         &refine_min_template_stddev,
+         "multiview: MPGC refines master patches with this contrast at "
+         "least (flat_patch), grey values");
+  r->Add("add_unmodelled_sigma",
+         &add_unmodelled_sigma,
+         "Add the errors MPGC's model leaves out, estimated from the cloud's "
+         "scatter about its local surface, to the points' sigmas in "
+         "quadrature");
+  r->Add("num_search_images",
+         &num_search_images,
+         "Search images per master (nearest viewing directions)");
+  r->Add("num_ray_views",
+         &num_ray_views,
+         "Approximations: search in the nearest n search images");
+  r->Add("max_search_angle_deg",
+         &max_search_angle_deg,
+         "Largest angle between master and search directions");
+  r->Add("cell_size",
+         &cell_size,
+         "Dense pattern: one Moravec point per cell of this side, px");
+  r->Add("moravec_window",
+         &moravec_window,
+         "Dense pattern: Moravec window side, px");
+  r->Add("min_interest",
+         &min_interest,
+         "Smallest Moravec interest of a cell's point");
+  r->Add("coarse_step",
+         &coarse_step,
+         "Coarse cells (full depth range): every n-th in x and y");
+  r->Add("band_tolerance",
+         &band_tolerance,
+         "Band beyond the coarse points' depths, share of the depth");
+  r->Add("band_radius_cells",
+         &band_radius_cells,
+         "Coarse cells around a cell that bound its band");
+  r->Add("min_depth",
+         &min_depth,
+         "Depth range when the model has too few sparse points");
+  r->Add("max_depth", &max_depth, "(see min_depth)");
+  r->Add("depth_margin",
+         &depth_margin,
+         "Widening of the sparse points' depth range, share");
+  r->Add("sparse_radius_px",
+         &sparse_radius_px,
+         "Sparse points within this radius bound a coarse cell's depths, px");
+  r->Add("sparse_tolerance",
+         &sparse_tolerance,
+         "Widening of those depths, share of the depth");
+  r->AddNested("search", &search);
+  r->Add("min_peak_margin",
+         &min_peak_margin,
+         "Approximations: best minus second peak along the ray");
+  r->Add("min_view_ncc",
+         &min_view_ncc,
+         "Views correlating less at the approximation stay out of the "
+         "point's MPGC");
+  r->AddNested("mpgc", &mpgc);
+  r->Add("max_sigma_gsd",
+         &max_sigma_gsd,
+         "Reject points with a larger sigma along the master ray, in ground "
+         "sampling distances");
+  r->Add("surface_radius_cells",
+         &surface_radius_cells,
+         "Neighbours of the off-surface test: cells around");
+  r->Add("off_surface_gsd",
+         &off_surface_gsd,
+         "Reject points off the plane of their neighbours by more than this "
+         "many GSDs");
+  r->Add("min_neighbors",
+         &min_neighbors,
+         "Reject points with fewer accepted neighbours (isolated)");
+  r->Add("max_growth_passes",
+         &max_growth_passes,
+         "Region growing: passes of MPGC from the surface of the accepted "
+         "neighbours (0 = off)");
+  r->Add("growth_min_search_views",
+         &growth_min_search_views,
+         "Region growing: search images a grown point needs");
+  r->Add("num_threads", &num_threads, "-1 = all cores");
 }
 
 const char* DenseRejectName(DenseReject reason) {

@@ -174,6 +174,9 @@ struct DenseOptions {
   int num_threads = -1;
   DenseOptions();      // the dense stage's own defaults for search and mpgc
   void Check() const;  // throws InputError naming field, value, rule
+  // Its fields by name (option_registry.h): patch_match.*, fusion.*,
+  // search.* and mpgc.* (mpgc.lsm.*) for the nested ones.
+  void Register(OptionRegistry* registry);
 };
 
 struct MasterSelection {

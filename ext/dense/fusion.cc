@@ -11,20 +11,35 @@ namespace bayon {
 
 void FusionOptions::Check() const {
   CheckOption(min_consistent_views >= 0,
-              "--min_consistent_views",
+              "min_consistent_views",
               ">= 0",
               min_consistent_views);
-  CheckOption(max_depth_error_px > 0,
-              "--max_depth_error_px",
-              "> 0",
-              max_depth_error_px);
+  CheckOption(
+      max_depth_error_px > 0, "max_depth_error_px", "> 0", max_depth_error_px);
   CheckOption(max_normal_error_deg > 0 && max_normal_error_deg <= 180,
-              "--max_normal_error_deg",
+              "max_normal_error_deg",
               "in (0, 180]",
               max_normal_error_deg);
-  CheckOption(
-      max_cost > 0 && max_cost <= 2, "--max_cost", "in (0, 2]", max_cost);
-  CheckOption(edge_margin_px >= 0, "--edge_margin_px", ">= 0", edge_margin_px);
+  CheckOption(max_cost > 0 && max_cost <= 2, "max_cost", "in (0, 2]", max_cost);
+  CheckOption(edge_margin_px >= 0, "edge_margin_px", ">= 0", edge_margin_px);
+}
+
+void FusionOptions::Register(OptionRegistry* r) {
+  r->Add("min_consistent_views",
+         &min_consistent_views,
+         "Other depth maps that must agree with a pixel");
+  r->Add("max_depth_error_px",
+         &max_depth_error_px,
+         "Agreement in depth, pixel footprints (depth / focal length) of the "
+         "depth map compared with");
+  r->Add("max_normal_error_deg",
+         &max_normal_error_deg,
+         "Agreement in normal, degrees");
+  r->Add("max_cost", &max_cost, "Largest matching cost (1 - NCC) fused");
+  r->Add("edge_margin_px",
+         &edge_margin_px,
+         "Depth-map pixels this near an area without depth are not fused "
+         "(against edge fattening; 0: off)");
 }
 
 namespace {

@@ -46,6 +46,8 @@ struct FusionOptions {
   // inside a surface) are closed first and do not count as edges. 0: off.
   int edge_margin_px = 8;
   void Check() const;  // throws InputError naming field, value, rule
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 // What became of a depth map's pixel in the fusion.

@@ -17,51 +17,73 @@
 namespace bayon {
 
 void MpgcOptions::Check() const {
-  lsm.Check();
-  CheckOption(grey_sigma > 0, "MpgcOptions.grey_sigma", "> 0", grey_sigma);
-  CheckOption(geometric_sigma_px > 0,
-              "MpgcOptions.geometric_sigma_px",
-              "> 0",
-              geometric_sigma_px);
-  CheckOption(max_iterations >= 1,
-              "MpgcOptions.max_iterations",
-              ">= 1",
-              max_iterations);
+  CheckNested("lsm", lsm);
+  CheckOption(grey_sigma > 0, "grey_sigma", "> 0", grey_sigma);
   CheckOption(
-      convergence_px > 0, "MpgcOptions.convergence_px", "> 0", convergence_px);
-  CheckOption(convergence_sigma >= 0,
-              "MpgcOptions.convergence_sigma",
-              ">= 0",
-              convergence_sigma);
+      geometric_sigma_px > 0, "geometric_sigma_px", "> 0", geometric_sigma_px);
+  CheckOption(max_iterations >= 1, "max_iterations", ">= 1", max_iterations);
+  CheckOption(convergence_px > 0, "convergence_px", "> 0", convergence_px);
   CheckOption(
-      max_shift_px > 0, "MpgcOptions.max_shift_px", "> 0", max_shift_px);
+      convergence_sigma >= 0, "convergence_sigma", ">= 0", convergence_sigma);
+  CheckOption(max_shift_px > 0, "max_shift_px", "> 0", max_shift_px);
   CheckOption(min_correlation > -1 && min_correlation < 1,
-              "MpgcOptions.min_correlation",
+              "min_correlation",
               "in (-1, 1)",
               min_correlation);
-  CheckOption(min_search_views >= 1,
-              "MpgcOptions.min_search_views",
-              ">= 1",
-              min_search_views);
+  CheckOption(
+      min_search_views >= 1, "min_search_views", ">= 1", min_search_views);
+}
+
+void MpgcOptions::Register(OptionRegistry* r) {
+  r->AddNested("lsm", &lsm);
+  r->Add("grey_sigma", &grey_sigma, "A priori sigma of a grey value");
+  r->Add("geometric_sigma_px",
+         &geometric_sigma_px,
+         "A priori sigma of the collinearity conditions, px");
+  r->Add("max_iterations", &max_iterations, "Most iterations per solution");
+  r->Add("convergence_px",
+         &convergence_px,
+         "Converged when no patch centre moves more, px");
+  r->Add("convergence_sigma",
+         &convergence_sigma,
+         "Converged also when a step moves the solution by less than this "
+         "many standard deviations (0: off)");
+  r->Add("max_shift_px",
+         &max_shift_px,
+         "Largest move of a patch from its approximation, px");
+  r->Add("min_correlation",
+         &min_correlation,
+         "Search patches correlating less are dropped");
+  r->Add("min_search_views",
+         &min_search_views,
+         "Fewest search images a point keeps");
 }
 
 void EpipolarSearchOptions::Check() const {
-  CheckOption(window_radius >= 1,
-              "EpipolarSearchOptions.window_radius",
-              ">= 1",
-              window_radius);
-  CheckOption(step_px > 0, "EpipolarSearchOptions.step_px", "> 0", step_px);
-  CheckOption(min_ncc > -1 && min_ncc < 1,
-              "EpipolarSearchOptions.min_ncc",
-              "in (-1, 1)",
-              min_ncc);
-  CheckOption(
-      min_views >= 1, "EpipolarSearchOptions.min_views", ">= 1", min_views);
-  CheckOption(
-      best_views >= 0, "EpipolarSearchOptions.best_views", ">= 0", best_views);
-  CheckOption(stride >= 1, "EpipolarSearchOptions.stride", ">= 1", stride);
-  CheckOption(
-      num_peaks >= 1, "EpipolarSearchOptions.num_peaks", ">= 1", num_peaks);
+  CheckOption(window_radius >= 1, "window_radius", ">= 1", window_radius);
+  CheckOption(step_px > 0, "step_px", "> 0", step_px);
+  CheckOption(min_ncc > -1 && min_ncc < 1, "min_ncc", "in (-1, 1)", min_ncc);
+  CheckOption(min_views >= 1, "min_views", ">= 1", min_views);
+  CheckOption(best_views >= 0, "best_views", ">= 0", best_views);
+  CheckOption(stride >= 1, "stride", ">= 1", stride);
+  CheckOption(num_peaks >= 1, "num_peaks", ">= 1", num_peaks);
+}
+
+void EpipolarSearchOptions::Register(OptionRegistry* r) {
+  r->Add("window_radius",
+         &window_radius,
+         "Correlation window along the ray: radius, px");
+  r->Add("step_px", &step_px, "Largest epipolar step between ray samples, px");
+  r->Add("min_ncc", &min_ncc, "Smallest mean correlation of an approximation");
+  r->Add("min_views", &min_views, "Fewest views the best sample is seen in");
+  r->Add("best_views",
+         &best_views,
+         "A sample's score over its best n views (0: all)");
+  r->Add("stride",
+         &stride,
+         "Every n-th ray sample first, then around the best peaks (1: every "
+         "sample)");
+  r->Add("num_peaks", &num_peaks, "Peaks searched finely after the stride");
 }
 
 const char* MpgcStatusName(MpgcStatus status) {

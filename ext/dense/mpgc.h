@@ -79,6 +79,8 @@ struct MpgcOptions {
   double min_correlation = 0.7;
   int min_search_views = 1;
   void Check() const;  // throws InputError naming field, value, rule
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 enum class MpgcStatus {
@@ -138,6 +140,8 @@ struct EpipolarSearchOptions {
   int stride = 1;
   int num_peaks = 3;
   void Check() const;  // throws InputError naming field, value, rule
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 struct EpipolarSearchResult {

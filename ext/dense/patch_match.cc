@@ -14,24 +14,48 @@
 namespace bayon {
 
 void PatchMatchOptions::Check() const {
-  CheckOption(window_radius >= 1, "--window_radius", ">= 1", window_radius);
+  CheckOption(window_radius >= 1, "window_radius", ">= 1", window_radius);
   CheckOption(window_step >= 1 && window_step <= window_radius,
-              "--window_step",
-              "in [1, --window_radius]",
+              "window_step",
+              "in [1, window_radius]",
               window_step);
-  CheckOption(num_iterations >= 1, "--num_iterations", ">= 1", num_iterations);
-  CheckOption(num_levels >= 1, "--patch_match_levels", ">= 1", num_levels);
-  CheckOption(best_views >= 1, "--best_views", ">= 1", best_views);
+  CheckOption(num_iterations >= 1, "num_iterations", ">= 1", num_iterations);
+  CheckOption(num_levels >= 1, "patch_match_levels", ">= 1", num_levels);
+  CheckOption(best_views >= 1, "best_views", ">= 1", best_views);
   CheckOption(
       num_propagation_candidates >= 1 && num_propagation_candidates <= 8,
-      "--patch_match_candidates",
+      "patch_match_candidates",
       "in [1, 8]",
       num_propagation_candidates);
-  CheckOption(min_texture >= 0, "--min_texture", ">= 0", min_texture);
+  CheckOption(min_texture >= 0, "min_texture", ">= 0", min_texture);
   CheckOption(max_normal_angle_deg > 0 && max_normal_angle_deg < 90,
-              "--max_normal_angle_deg",
+              "max_normal_angle_deg",
               "in (0, 90)",
               max_normal_angle_deg);
+}
+
+void PatchMatchOptions::Register(OptionRegistry* r) {
+  r->Add("window_radius",
+         &window_radius,
+         "Correlation window radius, depth-map px");
+  r->Add("window_step", &window_step, "Every n-th pixel of the window");
+  r->Add("num_iterations",
+         &num_iterations,
+         "Red-black propagation iterations per level");
+  r->Add("num_levels",
+         &num_levels,
+         "Coarse-to-fine levels of halved size (1: the working size alone), "
+         "each level's planes starting the next");
+  r->Add("num_propagation_candidates",
+         &num_propagation_candidates,
+         "Neighbours' planes scored per pixel (the best-matched of 8)");
+  r->Add("best_views", &best_views, "A plane's cost over its best n views");
+  r->Add("min_texture",
+         &min_texture,
+         "Master windows with less contrast are not matched (grey values)");
+  r->Add("max_normal_angle_deg",
+         &max_normal_angle_deg,
+         "Random normals within this angle of the master ray");
 }
 
 PinholeView MakePinholeView(const Camera& camera,

@@ -29,6 +29,7 @@
 
 #include "ext/core/camera.h"
 #include "ext/core/image_frame.h"
+#include "ext/core/option_registry.h"
 #include "ext/core/rigid3.h"
 
 #include <Eigen/Core>
@@ -81,6 +82,8 @@ struct PatchMatchOptions {
   // Random normals lie within this angle of the master ray.
   double max_normal_angle_deg = 70;
   void Check() const;  // throws InputError naming field, value, rule
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 // A master's depth map: per working pixel the depth (z in the master's

@@ -30,13 +30,6 @@ const char* InterpolationName(Interpolation interpolation) {
   return interpolation == Interpolation::kBicubic ? "bicubic" : "bilinear";
 }
 
-Interpolation ParseInterpolation(const std::string& name) {
-  if (name == "bilinear") return Interpolation::kBilinear;
-  if (name == "bicubic") return Interpolation::kBicubic;
-  ThrowInputError(
-      "interpolation must be bilinear or bicubic (got '", name, "')");
-}
-
 double InterpolationNoiseGain(Interpolation interpolation, double x, double y) {
   const double fx = x - 0.5 - std::floor(x - 0.5);
   const double fy = y - 0.5 - std::floor(y - 0.5);

@@ -35,10 +35,8 @@ namespace bayon {
 
 enum class Interpolation { kBilinear, kBicubic };
 
-// "bilinear" / "bicubic"; ParseInterpolation throws InputError naming the
-// choices for any other name.
+// "bilinear" / "bicubic".
 const char* InterpolationName(Interpolation interpolation);
-Interpolation ParseInterpolation(const std::string& name);
 
 struct ImageSample {
   float value = 0;

@@ -69,7 +69,6 @@ TEST(Interpolation, RefusesPointsWhoseFootprintLeavesTheImage) {
   EXPECT_TRUE(SampleImage(image, 9.49, 5, Interpolation::kBicubic, &sample));
   EXPECT_FALSE(SampleImage(image, 2.4, 5, Interpolation::kBicubic, &sample));
   EXPECT_FALSE(SampleImage(image, 5, -3, Interpolation::kBicubic, &sample));
-  EXPECT_THROW(ParseInterpolation("nearest"), InputError);
 }
 
 TEST(Pyramid, LevelsNestInColmapPixelCoordinates) {

@@ -32,39 +32,57 @@ LsmOptions DefaultRefinementLsmOptions() {
 }
 
 void KeypointRefinementOptions::Check() const {
-  lsm.Check();
+  CheckNested("lsm", lsm);
   CheckOption(smoothing_sigma_px >= 0 && smoothing_sigma_px <= 5,
-              "KeypointRefinementOptions.smoothing_sigma_px",
+              "smoothing_sigma_px",
               "in [0, 5]",
               smoothing_sigma_px);
-  CheckOption(max_sigma0 > 0,
-              "KeypointRefinementOptions.max_sigma0",
-              "> 0",
-              max_sigma0);
+  CheckOption(max_sigma0 > 0, "max_sigma0", "> 0", max_sigma0);
   CheckOption(min_correlation >= -1 && min_correlation < 1,
-              "KeypointRefinementOptions.min_correlation",
+              "min_correlation",
               "in [-1, 1)",
               min_correlation);
-  CheckOption(max_sigma_px > 0,
-              "KeypointRefinementOptions.max_sigma_px",
-              "> 0",
-              max_sigma_px);
-  CheckOption(max_shift_px > 0,
-              "KeypointRefinementOptions.max_shift_px",
-              "> 0",
-              max_shift_px);
-  CheckOption(max_backmatch_px > 0,
-              "KeypointRefinementOptions.max_backmatch_px",
-              "> 0",
-              max_backmatch_px);
+  CheckOption(max_sigma_px > 0, "max_sigma_px", "> 0", max_sigma_px);
+  CheckOption(max_shift_px > 0, "max_shift_px", "> 0", max_shift_px);
+  CheckOption(
+      max_backmatch_px > 0, "max_backmatch_px", "> 0", max_backmatch_px);
   CheckOption(num_reference_candidates >= 1,
-              "KeypointRefinementOptions.num_reference_candidates",
+              "num_reference_candidates",
               ">= 1",
               num_reference_candidates);
-  CheckOption(max_track_length >= 2,
-              "KeypointRefinementOptions.max_track_length",
-              ">= 2",
-              max_track_length);
+  CheckOption(
+      max_track_length >= 2, "max_track_length", ">= 2", max_track_length);
+}
+
+void KeypointRefinementOptions::Register(OptionRegistry* r) {
+  r->AddNested("lsm", &lsm);
+  r->Add("smoothing_sigma_px",
+         &smoothing_sigma_px,
+         "Gaussian smoothing of the images before matching, px (0: none)");
+  r->Add("use_keypoint_shape",
+         &use_keypoint_shape,
+         "1: start from the keypoints' affine frames");
+  r->Add("max_sigma0", &max_sigma0, "Largest sigma0, grey values");
+  r->Add("min_correlation",
+         &min_correlation,
+         "Smallest correlation of the matched patches");
+  r->Add("max_sigma_px",
+         &max_sigma_px,
+         "Largest standard deviation of a shift, pixels");
+  r->Add("max_shift_px",
+         &max_shift_px,
+         "Largest move from the start (keypoint or correlation peak), px");
+  r->Add("back_matching",
+         &back_matching,
+         "1: match back into the reference image");
+  r->Add("max_backmatch_px",
+         &max_backmatch_px,
+         "Largest back-matching miss, pixels");
+  r->Add("num_reference_candidates",
+         &num_reference_candidates,
+         "Best-textured observations tried as the track's reference");
+  r->Add("max_track_length", &max_track_length, "Longer tracks are left alone");
+  r->Add("num_threads", &num_threads, "Threads (-1 = all cores)");
 }
 
 const char* ObservationOutcomeName(ObservationOutcome outcome) {

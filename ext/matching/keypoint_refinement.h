@@ -98,6 +98,8 @@ struct KeypointRefinementOptions {
   int max_track_length = 50;
   int num_threads = -1;  // -1 = all cores
   void Check() const;    // throws InputError naming field, value, rule
+  // Its fields by name (option_registry.h), LSM's as lsm.*.
+  void Register(OptionRegistry* registry);
 };
 
 // One keypoint of one image.

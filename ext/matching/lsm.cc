@@ -332,35 +332,75 @@ bool FitLsmRadiometry(double min_scale,
 
 void LsmOptions::Check() const {
   CheckOption(patch_radius >= 2 && patch_radius <= 50,
-              "LsmOptions.patch_radius",
+              "patch_radius",
               "in [2, 50]",
               patch_radius);
+  CheckOption(max_iterations >= 1, "max_iterations", ">= 1", max_iterations);
+  CheckOption(convergence_px > 0, "convergence_px", "> 0", convergence_px);
   CheckOption(
-      max_iterations >= 1, "LsmOptions.max_iterations", ">= 1", max_iterations);
-  CheckOption(
-      convergence_px > 0, "LsmOptions.convergence_px", "> 0", convergence_px);
-  CheckOption(min_pivot > 0 && min_pivot < 1,
-              "LsmOptions.min_pivot",
-              "in (0, 1)",
-              min_pivot);
+      min_pivot > 0 && min_pivot < 1, "min_pivot", "in (0, 1)", min_pivot);
   CheckOption(
       min_shift_information_ratio > 0 && min_shift_information_ratio < 1,
-      "LsmOptions.min_shift_information_ratio",
+      "min_shift_information_ratio",
       "in (0, 1)",
       min_shift_information_ratio);
   CheckOption(min_template_stddev >= 0,
-              "LsmOptions.min_template_stddev",
+              "min_template_stddev",
               ">= 0",
               min_template_stddev);
-  CheckOption(max_shift_px > 0, "LsmOptions.max_shift_px", "> 0", max_shift_px);
+  CheckOption(max_shift_px > 0, "max_shift_px", "> 0", max_shift_px);
   CheckOption(min_shape_scale > 0 && min_shape_scale < 1,
-              "LsmOptions.min_shape_scale",
+              "min_shape_scale",
               "in (0, 1)",
               min_shape_scale);
-  CheckOption(max_shape_scale > 1,
-              "LsmOptions.max_shape_scale",
-              "> 1",
-              max_shape_scale);
+  CheckOption(max_shape_scale > 1, "max_shape_scale", "> 1", max_shape_scale);
+}
+
+void LsmOptions::Register(OptionRegistry* r) {
+  r->Add("patch_radius",
+         &patch_radius,
+         "Half side of the patches, px (7: 15 x 15)");
+  r->AddChoice("interpolation",
+               &interpolation,
+               ChoicesOf<Interpolation>(
+                   InterpolationName,
+                   {Interpolation::kBilinear, Interpolation::kBicubic}),
+               "Resampling of the search patches");
+  r->Add("estimate_shape",
+         &estimate_shape,
+         "1: affine patch shape; 0: shifts only");
+  r->Add("estimate_radiometry",
+         &estimate_radiometry,
+         "1: estimate brightness and contrast; 0: grey values as they are");
+  r->Add("max_iterations", &max_iterations, "Most iterations per match");
+  r->Add("step_control",
+         &step_control,
+         "1: halve a step that raises the sum of squares");
+  r->Add("correct_resampling_noise",
+         &correct_resampling_noise,
+         "1: scale sigma0 for the noise the resampling removed");
+  r->Add("convergence_px",
+         &convergence_px,
+         "Converged when shift and patch corners move less, px");
+  r->Add("min_pivot",
+         &min_pivot,
+         "Adaptive parameters: smallest pivot of a parameter taken");
+  r->Add("min_shift_information_ratio",
+         &min_shift_information_ratio,
+         "Adaptive parameters: smallest share of a shift's information kept");
+  r->Add("min_template_stddev",
+         &min_template_stddev,
+         "Templates with less contrast are flat (standard deviation of the "
+         "grey values)");
+  r->Add("max_shift_px",
+         &max_shift_px,
+         "Diverged: the centre moved further from its approximation, px");
+  r->Add("min_shape_scale",
+         &min_shape_scale,
+         "Diverged: the patch shape shrank below this scale");
+  r->Add("max_shape_scale",
+         &max_shape_scale,
+         "Diverged: the patch shape grew beyond this scale");
 }
 
 namespace {

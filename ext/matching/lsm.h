@@ -57,6 +57,7 @@
 // MatchLsm below is the unconstrained solution of one pair.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/image/interpolation.h"
 
 #include <Eigen/Core>
@@ -210,6 +211,8 @@ struct LsmOptions {
   double min_shape_scale = 0.5;
   double max_shape_scale = 2.0;
   void Check() const;  // throws InputError naming field, value, rule
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 enum class LsmStatus {

@@ -42,7 +42,7 @@ KeypointRefinementOptions DefaultTieMatchingOptions() {
 }
 
 void TiePointOptions::Check() const {
-  matching.Check();
+  CheckNested("matching", matching);
   CheckOption(grid_cols >= 1, "TiePointOptions.grid_cols", ">= 1", grid_cols);
   CheckOption(grid_rows >= 1, "TiePointOptions.grid_rows", ">= 1", grid_rows);
   CheckOption(candidates_per_cell >= 1,
