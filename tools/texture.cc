@@ -20,8 +20,7 @@ namespace bayon {
 
 int RunTexture(int argc, char** argv) {
   OrientedInput in;
-  std::string mesh_path, output_path, log_path, preprocess = "balance",
-                                                blend = "view_dependent";
+  std::string mesh_path, output_path, log_path;
   std::vector<std::string> formats = {"obj", "ply", "wrl", "glb"};
   TextureOptions options;
   ModelExportOptions export_options;
@@ -46,44 +45,7 @@ int RunTexture(int argc, char** argv) {
   app.add_option("--stem", export_options.stem, "File name of the model files");
   app.add_option("--formats", formats, "Model formats: obj, ply, wrl, glb")
       ->delimiter(',');
-  app.add_option("--preprocess",
-                 preprocess,
-                 "Radiometric pre-processing: balance (true colours), "
-                 "highpass_equalize (the paper's), wallis, none");
-  app.add_option("--seam_leveling",
-                 options.seam_leveling,
-                 "1: level the colours across chart borders");
-  app.add_option("--exclude_images",
-                 options.exclude_images,
-                 "Photographs not to texture from (names, comma separated)")
-      ->delimiter(',');
-  app.add_option("--filter_radius_px",
-                 options.filter_radius_px,
-                 "High-pass radius / Wallis window (Gaussian sigma), px");
-  app.add_option(
-      "--blend",
-      blend,
-      "view_dependent (weighted by projected area) or none (the "
-      "chart's image alone: the optimal one, see --chart_merge_ratio)");
-  app.add_option("--chart_merge_ratio",
-                 options.chart_merge_ratio,
-                 "A face joins its neighbours' image when that sees it with "
-                 "at least this share of its largest area (1: always the "
-                 "optimal image)");
-  app.add_option("--texel_size",
-                 options.texel_size,
-                 "Atlas texel size, metres (0: median GSD of the optimal "
-                 "images)");
-  app.add_option(
-      "--max_atlas_size", options.max_atlas_size, "Largest atlas side");
-  app.add_option("--padding_px", options.padding_px, "Texels between charts");
-  app.add_option("--min_view_angle_deg",
-                 options.min_view_angle_deg,
-                 "A face is unseen when the view ray is nearer its plane");
-  app.add_option("--depth_tolerance",
-                 options.depth_tolerance,
-                 "Occlusion test: share of the depth");
-  app.add_option("--num_threads", options.num_threads, "-1 = all cores");
+  command.AddOptions(&options);
   bool overwrite = false;
   app.add_option("--overwrite", overwrite, "Replace existing output files");
   app.add_option("--log_path",
@@ -100,8 +62,6 @@ int RunTexture(int argc, char** argv) {
         "give --workspace_path, or --image_path, --input_path, --mesh_path "
         "and --output_path");
   }
-  options.preprocess = ParseTexturePreprocess(preprocess);
-  options.blend = ParseTextureBlend(blend);
   options.Check();
   export_options.obj = export_options.ply = export_options.vrml =
       export_options.gltf = false;

@@ -484,47 +484,73 @@ const char* TexturePreprocessName(TexturePreprocess preprocess) {
   return "?";
 }
 
-TexturePreprocess ParseTexturePreprocess(const std::string& name) {
-  for (TexturePreprocess p : {TexturePreprocess::kNone,
-                              TexturePreprocess::kBalance,
-                              TexturePreprocess::kHighPassEqualize,
-                              TexturePreprocess::kWallis}) {
-    if (name == TexturePreprocessName(p)) return p;
-  }
-  ThrowInputError("--preprocess: unknown '",
-                  name,
-                  "' (expected balance, highpass_equalize, wallis or none)");
-}
-
 const char* TextureBlendName(TextureBlend blend) {
   return blend == TextureBlend::kNone ? "none" : "view_dependent";
 }
 
-TextureBlend ParseTextureBlend(const std::string& name) {
-  if (name == "none") return TextureBlend::kNone;
-  if (name == "view_dependent") return TextureBlend::kViewDependent;
-  ThrowInputError(
-      "--blend: unknown '", name, "' (expected view_dependent or none)");
-}
-
 void TextureOptions::Check() const {
   if (!(filter_radius_px >= 1)) {
-    ThrowInputError("--filter_radius_px must be at least 1");
+    ThrowInputError("filter_radius_px must be at least 1");
   }
-  if (!(texel_size >= 0)) ThrowInputError("--texel_size must not be negative");
+  if (!(texel_size >= 0)) ThrowInputError("texel_size must not be negative");
   if (!(chart_merge_ratio > 0 && chart_merge_ratio <= 1)) {
-    ThrowInputError("--chart_merge_ratio must lie in (0, 1]");
+    ThrowInputError("chart_merge_ratio must lie in (0, 1]");
   }
   if (max_atlas_size < 64 || max_atlas_size > 32768) {
-    ThrowInputError("--max_atlas_size must lie in [64, 32768]");
+    ThrowInputError("max_atlas_size must lie in [64, 32768]");
   }
-  if (padding_px < 1) ThrowInputError("--padding_px must be at least 1");
+  if (padding_px < 1) ThrowInputError("padding_px must be at least 1");
   if (!(min_view_angle_deg >= 0 && min_view_angle_deg < 90)) {
-    ThrowInputError("--min_view_angle_deg must lie in [0, 90)");
+    ThrowInputError("min_view_angle_deg must lie in [0, 90)");
   }
   if (!(depth_tolerance > 0 && depth_tolerance < 1)) {
-    ThrowInputError("--depth_tolerance must lie in (0, 1)");
+    ThrowInputError("depth_tolerance must lie in (0, 1)");
   }
+}
+
+void TextureOptions::Register(OptionRegistry* r) {
+  r->AddChoice(
+      "preprocess",
+      &preprocess,
+      ChoicesOf<TexturePreprocess>(TexturePreprocessName,
+                                   {TexturePreprocess::kBalance,
+                                    TexturePreprocess::kHighPassEqualize,
+                                    TexturePreprocess::kWallis,
+                                    TexturePreprocess::kNone}),
+      "Radiometric pre-processing: balance (true colours), "
+      "highpass_equalize (the paper's), wallis, none");
+  r->Add("seam_leveling",
+         &seam_leveling,
+         "1: level the colours across chart borders");
+  r->Add("exclude_images",
+         &exclude_images,
+         "Photographs not to texture from (names, comma separated)");
+  r->Add("filter_radius_px",
+         &filter_radius_px,
+         "High-pass radius / Wallis window (Gaussian sigma), px");
+  r->AddChoice("blend",
+               &blend,
+               ChoicesOf<TextureBlend>(
+                   TextureBlendName,
+                   {TextureBlend::kViewDependent, TextureBlend::kNone}),
+               "view_dependent (weighted by projected area) or none (the "
+               "chart's image alone: the optimal one, see chart_merge_ratio)");
+  r->Add("chart_merge_ratio",
+         &chart_merge_ratio,
+         "A face joins its neighbours' image when that sees it with at least "
+         "this share of its largest area (1: always the optimal image)");
+  r->Add("texel_size",
+         &texel_size,
+         "Atlas texel size, metres (0: median GSD of the optimal images)");
+  r->Add("max_atlas_size", &max_atlas_size, "Largest atlas side");
+  r->Add("padding_px", &padding_px, "Texels between charts");
+  r->Add("min_view_angle_deg",
+         &min_view_angle_deg,
+         "A face is unseen when the view ray is nearer its plane");
+  r->Add("depth_tolerance",
+         &depth_tolerance,
+         "Occlusion test: share of the depth");
+  r->Add("num_threads", &num_threads, "-1 = all cores");
 }
 
 std::vector<TextureImage> LoadTextureImages(const Scene& scene,

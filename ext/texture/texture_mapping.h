@@ -52,6 +52,7 @@
 // 8-bit grey levels.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/point_cloud.h"
 #include "ext/core/scene.h"
 #include "ext/texture/color_balance.h"
@@ -69,10 +70,7 @@ enum class TexturePreprocess { kNone, kBalance, kHighPassEqualize, kWallis };
 enum class TextureBlend { kNone, kViewDependent };
 
 const char* TexturePreprocessName(TexturePreprocess preprocess);
-// Throws InputError for an unknown name.
-TexturePreprocess ParseTexturePreprocess(const std::string& name);
 const char* TextureBlendName(TextureBlend blend);
-TextureBlend ParseTextureBlend(const std::string& name);
 
 struct TextureOptions {
   TexturePreprocess preprocess = TexturePreprocess::kBalance;
@@ -101,6 +99,8 @@ struct TextureOptions {
   cv::Vec3b unseen_bgr = cv::Vec3b(128, 128, 128);
   int num_threads = -1;
   void Check() const;
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 // A photograph with its orientation, loaded and pre-processed.
