@@ -163,7 +163,8 @@ TEST(EditCommand, BadInput) {
                               out,
                               "--num_iterations",
                               "0"},
-                             "--num_iterations must be in [1, 20] (got 0)",
+                             "surface_fit.num_iterations must be in [1, 20] "
+                             "(got 0)",
                              dir + "/line.ply",
                              {out});
   ExpectRefusedWithoutOutput({"edit",

@@ -14,7 +14,6 @@ namespace bayon {
 
 int RunEdit(int argc, char** argv) {
   std::string input_path, output_path, removed_path, report_path, log_path;
-  std::string method_name = "surface_fit";
   bool overwrite = false;
   CloudEditOptions options;
   CommandLine command(
@@ -29,49 +28,20 @@ int RunEdit(int argc, char** argv) {
   app.add_option("--input_path", input_path, "Point cloud (PLY)")->required();
   app.add_option("--output_path", output_path, "Edited cloud (PLY)")
       ->required();
-  app.add_option("--method", method_name, "surface_fit, statistical, radius")
-      ->transform(CLI::IsMember({"surface_fit", "statistical", "radius"}));
-  app.add_option("--num_neighbors",
-                 options.surface_fit.num_neighbors,
-                 "surface_fit: neighbours per second-order patch");
-  app.add_option("--num_iterations",
-                 options.surface_fit.num_iterations,
-                 "surface_fit: passes of fitting and testing (paper: 3-5)");
-  app.add_option("--max_deviation_sigma",
-                 options.surface_fit.max_deviation_sigma,
-                 "surface_fit: delete beyond this many standard deviations");
-  app.add_option("--max_deviation_m",
-                 options.surface_fit.max_deviation_m,
-                 "surface_fit: delete beyond this distance, metres (0 = off)");
-  app.add_option("--num_close_neighbors",
-                 options.surface_fit.num_close_neighbors,
-                 "surface_fit: the close test, against the plane of this "
-                 "many nearest points (0 = off)");
-  app.add_option("--max_close_deviation_sigma",
-                 options.surface_fit.max_close_deviation_sigma,
-                 "surface_fit: the close test's threshold, standard "
-                 "deviations");
-  app.add_option(
-      "--use_point_precision",
-      options.surface_fit.use_point_precision,
-      "surface_fit: 1 = weights and sigma units from s_normal, or sx, sy, sz");
-  app.add_option("--added_sigma_m",
-                 options.surface_fit.added_sigma_m,
-                 "surface_fit: sigma added to every stated one in quadrature, "
-                 "metres (-1 = estimated from the cloud, 0 = none)");
-  app.add_option("--mean_k",
-                 options.statistical.mean_k,
-                 "statistical: neighbours for the mean distance");
-  app.add_option("--stddev_mul",
-                 options.statistical.stddev_mul,
-                 "statistical: threshold in standard deviations");
-  app.add_option("--radius_m",
-                 options.radius.radius_m,
-                 "radius: search radius, metres (0 = 5 x median spacing)");
-  app.add_option("--min_neighbors",
-                 options.radius.min_neighbors,
-                 "radius: fewest neighbours within the radius");
-  app.add_option("--num_threads", options.num_threads, "-1 = all cores");
+  command.AddOptions(
+      &options,
+      {{"num_neighbors", "surface_fit.num_neighbors"},
+       {"num_iterations", "surface_fit.num_iterations"},
+       {"max_deviation_sigma", "surface_fit.max_deviation_sigma"},
+       {"max_deviation_m", "surface_fit.max_deviation_m"},
+       {"num_close_neighbors", "surface_fit.num_close_neighbors"},
+       {"max_close_deviation_sigma", "surface_fit.max_close_deviation_sigma"},
+       {"use_point_precision", "surface_fit.use_point_precision"},
+       {"added_sigma_m", "surface_fit.added_sigma_m"},
+       {"mean_k", "statistical.mean_k"},
+       {"stddev_mul", "statistical.stddev_mul"},
+       {"radius_m", "radius.radius_m"},
+       {"min_neighbors", "radius.min_neighbors"}});
   app.add_option("--removed_path",
                  removed_path,
                  "Also write the removed points here (PLY, attribute "
@@ -83,7 +53,6 @@ int RunEdit(int argc, char** argv) {
   app.add_option(
       "--log_path", log_path, "Log file (default <workspace>/logs/edit.log)");
   if (!command.Parse(argc, argv)) return 0;
-  options.method = ParseCloudEditMethod(method_name);
   options.Check();
   CheckFileExists(input_path, "--input_path");
   CheckOutputPath(output_path, overwrite);
@@ -101,7 +70,8 @@ int RunEdit(int argc, char** argv) {
     throw RunFailure(StrCat(input_path, ": the edit removed every point"));
   }
   PlyWriteOptions write_options;
-  write_options.comment = "bayon edit --method " + method_name;
+  write_options.comment =
+      "bayon edit --method " + CloudEditMethodName(options.method);
   std::filesystem::create_directories(
       std::filesystem::absolute(output_path).parent_path());
   WritePointCloudPly(edited, output_path, write_options);

@@ -529,19 +529,6 @@ std::string CloudEditMethodName(CloudEditMethod method) {
   return "?";
 }
 
-CloudEditMethod ParseCloudEditMethod(const std::string& name) {
-  for (CloudEditMethod method : {CloudEditMethod::kSurfaceFit,
-                                 CloudEditMethod::kStatistical,
-                                 CloudEditMethod::kRadius}) {
-    if (name == CloudEditMethodName(method)) return method;
-  }
-  ThrowInputError(
-      "--method must be one of surface_fit, statistical, radius "
-      "(got '",
-      name,
-      "')");
-}
-
 std::string EditReasonName(EditReason reason) {
   switch (reason) {
     case EditReason::kKept:
@@ -563,49 +550,101 @@ std::string EditReasonName(EditReason reason) {
 
 void SurfaceFitEditOptions::Check() const {
   CheckOption(num_neighbors >= 8 && num_neighbors <= 500,
-              "--num_neighbors",
+              "num_neighbors",
               "in [8, 500]",
               num_neighbors);
   CheckOption(num_iterations >= 1 && num_iterations <= 20,
-              "--num_iterations",
+              "num_iterations",
               "in [1, 20]",
               num_iterations);
   CheckOption(max_deviation_sigma > 0,
-              "--max_deviation_sigma",
+              "max_deviation_sigma",
               "> 0",
               max_deviation_sigma);
-  CheckOption(
-      max_deviation_m >= 0, "--max_deviation_m", ">= 0", max_deviation_m);
+  CheckOption(max_deviation_m >= 0, "max_deviation_m", ">= 0", max_deviation_m);
   CheckOption(
       num_close_neighbors == 0 ||
           (num_close_neighbors >= 6 && num_close_neighbors <= num_neighbors),
-      "--num_close_neighbors",
-      "0 or in [6, --num_neighbors]",
+      "num_close_neighbors",
+      "0 or in [6, num_neighbors]",
       num_close_neighbors);
   CheckOption(added_sigma_m >= 0 || added_sigma_m == -1,
-              "--added_sigma_m",
+              "added_sigma_m",
               ">= 0, or -1 to estimate it",
               added_sigma_m);
   CheckOption(max_close_deviation_sigma > 0,
-              "--max_close_deviation_sigma",
+              "max_close_deviation_sigma",
               "> 0",
               max_close_deviation_sigma);
 }
 
 void StatisticalEditOptions::Check() const {
-  CheckOption(mean_k >= 2, "--mean_k", ">= 2", mean_k);
-  CheckOption(stddev_mul > 0, "--stddev_mul", "> 0", stddev_mul);
+  CheckOption(mean_k >= 2, "mean_k", ">= 2", mean_k);
+  CheckOption(stddev_mul > 0, "stddev_mul", "> 0", stddev_mul);
 }
 
 void RadiusEditOptions::Check() const {
-  CheckOption(radius_m >= 0, "--radius_m", ">= 0 (0 = automatic)", radius_m);
-  CheckOption(min_neighbors >= 1, "--min_neighbors", ">= 1", min_neighbors);
+  CheckOption(radius_m >= 0, "radius_m", ">= 0 (0 = automatic)", radius_m);
+  CheckOption(min_neighbors >= 1, "min_neighbors", ">= 1", min_neighbors);
 }
 
 void CloudEditOptions::Check() const {
-  surface_fit.Check();
-  statistical.Check();
-  radius.Check();
+  CheckNested("surface_fit", surface_fit);
+  CheckNested("statistical", statistical);
+  CheckNested("radius", radius);
+}
+
+void SurfaceFitEditOptions::Register(OptionRegistry* r) {
+  r->Add("num_neighbors", &num_neighbors, "Neighbours per second-order patch");
+  r->Add("num_iterations",
+         &num_iterations,
+         "Passes of fitting and testing (paper: 3-5)");
+  r->Add("max_deviation_sigma",
+         &max_deviation_sigma,
+         "Delete beyond this many standard deviations");
+  r->Add("max_deviation_m",
+         &max_deviation_m,
+         "Delete beyond this distance, metres (0 = off)");
+  r->Add("num_close_neighbors",
+         &num_close_neighbors,
+         "The close test, against the plane of this many nearest points (0 = "
+         "off)");
+  r->Add("max_close_deviation_sigma",
+         &max_close_deviation_sigma,
+         "The close test's threshold, standard deviations");
+  r->Add("use_point_precision",
+         &use_point_precision,
+         "1 = weights and sigma units from s_normal, or sx, sy, sz");
+  r->Add("added_sigma_m",
+         &added_sigma_m,
+         "Sigma added to every stated one in quadrature, metres (-1 = "
+         "estimated from the cloud, 0 = none)");
+}
+
+void StatisticalEditOptions::Register(OptionRegistry* r) {
+  r->Add("mean_k", &mean_k, "Neighbours for the mean distance");
+  r->Add("stddev_mul", &stddev_mul, "Threshold in standard deviations");
+}
+
+void RadiusEditOptions::Register(OptionRegistry* r) {
+  r->Add(
+      "radius_m", &radius_m, "Search radius, metres (0 = 5 x median spacing)");
+  r->Add(
+      "min_neighbors", &min_neighbors, "Fewest neighbours within the radius");
+}
+
+void CloudEditOptions::Register(OptionRegistry* r) {
+  r->AddChoice("method",
+               &method,
+               ChoicesOf<CloudEditMethod>(CloudEditMethodName,
+                                          {CloudEditMethod::kSurfaceFit,
+                                           CloudEditMethod::kStatistical,
+                                           CloudEditMethod::kRadius}),
+               "surface_fit, statistical, radius");
+  r->AddNested("surface_fit", &surface_fit);
+  r->AddNested("statistical", &statistical);
+  r->AddNested("radius", &radius);
+  r->Add("num_threads", &num_threads, "-1 = all cores");
 }
 
 namespace {

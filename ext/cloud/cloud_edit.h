@@ -28,6 +28,7 @@
 // RadiusOutlierRemoval, for comparison.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/point_cloud.h"
 
 #include <nlohmann/json.hpp>
@@ -40,10 +41,8 @@ namespace bayon {
 
 enum class CloudEditMethod { kSurfaceFit, kStatistical, kRadius };
 
-// "surface_fit", "statistical", "radius"; ParseCloudEditMethod throws
-// InputError listing the choices.
+// "surface_fit", "statistical", "radius".
 std::string CloudEditMethodName(CloudEditMethod method);
-CloudEditMethod ParseCloudEditMethod(const std::string& name);
 
 struct SurfaceFitEditOptions {
   // Neighbours per patch. More smooths the patch over more relief (misfit
@@ -81,6 +80,8 @@ struct SurfaceFitEditOptions {
   // s_normal of 1.44 mm against 2.09 mm for all.
   double added_sigma_m = -1;
   void Check() const;
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 struct StatisticalEditOptions {
@@ -90,6 +91,8 @@ struct StatisticalEditOptions {
   int mean_k = 24;
   double stddev_mul = 2.0;
   void Check() const;
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 struct RadiusEditOptions {
@@ -99,6 +102,8 @@ struct RadiusEditOptions {
   double radius_m = 0;
   int min_neighbors = 6;
   void Check() const;
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 struct CloudEditOptions {
@@ -108,6 +113,8 @@ struct CloudEditOptions {
   RadiusEditOptions radius;
   int num_threads = -1;  // -1 = all cores
   void Check() const;
+  // Its fields by name (option_registry.h).
+  void Register(OptionRegistry* registry);
 };
 
 // Why a point was deleted.
