@@ -27,10 +27,6 @@ namespace fs = std::filesystem;
 namespace bayon {
 namespace {
 
-std::string In(const std::string& folder, const std::string& name) {
-  return (fs::path(folder) / name).string();
-}
-
 // The in-process entry point of a bayon stage.
 int RunBayonCommand(const std::string& command,
                     const std::vector<std::string>& words) {
@@ -111,7 +107,7 @@ struct PipelineArguments {
 // The workspace's absolute paths, its database and control/; returns the
 // number of photographs, refusing a folder without any.
 size_t ResolveWorkspace(PipelineContext* c) {
-  if (c->image_path.empty()) c->image_path = In(c->workspace, "images");
+  if (c->image_path.empty()) c->image_path = JoinPath(c->workspace, "images");
   CheckDirectoryExists(c->image_path, "--image_path");
   const size_t num_images = ListImages(c->image_path).size();
   if (num_images == 0) {
@@ -121,9 +117,9 @@ size_t ResolveWorkspace(PipelineContext* c) {
   }
   c->image_path = fs::absolute(c->image_path).lexically_normal().string();
   c->workspace = fs::absolute(c->workspace).lexically_normal().string();
-  c->database = In(c->workspace, "database.db");
-  if (fs::is_directory(In(c->workspace, "control"))) {
-    c->control = In(c->workspace, "control");
+  c->database = JoinPath(c->workspace, "database.db");
+  if (fs::is_directory(JoinPath(c->workspace, "control"))) {
+    c->control = JoinPath(c->workspace, "control");
   }
   return num_images;
 }
@@ -183,8 +179,8 @@ void PrintOutcome(const CommandLine& command,
            {"report", "report.html"},
            {"model", "model/model.glb"},
            {"viewer", "viewer/index.html"}}) {
-    if (fs::exists(In(c.workspace, path))) {
-      products += StrCat("; ", label, ": ", In(c.workspace, path));
+    if (fs::exists(JoinPath(c.workspace, path))) {
+      products += StrCat("; ", label, ": ", JoinPath(c.workspace, path));
     }
   }
   command.PrintSummary(
@@ -232,10 +228,10 @@ int RunPipeline(int argc, char** argv) {
   }
 
   LogStagesToTheirFiles();
-  fs::create_directories(In(c.workspace, "pipeline"));
+  fs::create_directories(JoinPath(c.workspace, "pipeline"));
   // One run per workspace: a second would run the same stages into the
   // same files.
-  const FileLock lock(In(c.workspace, "pipeline/lock"),
+  const FileLock lock(JoinPath(c.workspace, "pipeline/lock"),
                       StrCat("workspace ", c.workspace));
   command.StartLog(WorkspaceLogPath(c.workspace, "pipeline"));
   LOG(INFO) << "config: "

@@ -280,4 +280,8 @@ FileLock::~FileLock() {
   if (fd_ >= 0) ::close(fd_);  // releases the flock
 }
 
+std::string JoinPath(const std::string& folder, const std::string& name) {
+  return (std::filesystem::path(folder) / name).string();
+}
+
 }  // namespace bayon

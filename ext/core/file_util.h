@@ -18,6 +18,9 @@ void WriteFileAtomically(const std::string& path, const std::string& content);
 // Reads a whole file; throws InputError naming `path` when it cannot.
 std::string ReadFileToString(const std::string& path);
 
+// folder/name, as a string (std::filesystem's join).
+std::string JoinPath(const std::string& folder, const std::string& name);
+
 // A folder written as a whole. Files go into temp_path(); Commit() renames it
 // to the final path, replacing an existing folder only when overwriting was
 // allowed (the old one is moved aside first and removed after the swap).

@@ -18,6 +18,12 @@ namespace fs = std::filesystem;
 namespace bayon {
 namespace {
 
+TEST(FileUtil, JoinPathPutsOneSeparatorBetween) {
+  EXPECT_EQ(JoinPath("ws", "dense/points.ply"), "ws/dense/points.ply");
+  EXPECT_EQ(JoinPath("ws/", "mesh"), "ws/mesh");
+  EXPECT_EQ(JoinPath("", "mesh"), "mesh");
+}
+
 TEST(FileUtil, AtomicWriteLeavesNoTemporaryFiles) {
   const std::string dir = testing::TempDir("file_util");
   WriteFileAtomically(dir + "/a.txt", "hello");

@@ -2,6 +2,7 @@
 #include "ext/pipeline/pipeline_run.h"
 
 #include "ext/core/errors.h"
+#include "ext/core/file_util.h"
 
 #include <glog/logging.h>
 
@@ -13,10 +14,6 @@ namespace fs = std::filesystem;
 
 namespace bayon {
 namespace {
-
-std::string In(const std::string& folder, const std::string& name) {
-  return (fs::path(folder) / name).string();
-}
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
@@ -109,9 +106,9 @@ bool PipelineRun::RunOrSkip(int i) {
   std::string failure;
   try {
     if (stage.program == "colmap") {
-      RunColmapStage(
-          stage,
-          In(In(c_.workspace, "logs"), "colmap_" + stage.command + ".log"));
+      RunColmapStage(stage,
+                     JoinPath(JoinPath(c_.workspace, "logs"),
+                              "colmap_" + stage.command + ".log"));
     } else if (run_bayon_(stage.command, words) != 0) {
       failure = "produced nothing usable (exit 1)";
     }
@@ -124,7 +121,8 @@ bool PipelineRun::RunOrSkip(int i) {
   if (!failure.empty()) {
     record_failure(failure);
     std::cerr << "pipeline: stage " << stage.name << " failed: " << failure
-              << "; its log is in " << In(c_.workspace, "logs") << std::endl;
+              << "; its log is in " << JoinPath(c_.workspace, "logs")
+              << std::endl;
     return false;
   }
   run.seconds = SecondsSince(stage_start);

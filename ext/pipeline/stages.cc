@@ -52,10 +52,6 @@ bool IsColmapCommand(const std::string& name) {
          name == "sequential_matcher" || name == "mapper";
 }
 
-std::string In(const std::string& folder, const std::string& name) {
-  return (fs::path(folder) / name).string();
-}
-
 // The stages with the workspace's paths, added in the chain's order by
 // named steps; the members are the paths and options they share.
 struct StageMaker {
@@ -70,12 +66,12 @@ struct StageMaker {
         db_images(
             {{"database_path", c.database}, {"image_path", c.image_path}}),
         threads_option({{"num_threads", threads}}),
-        targets(In(w, "targets/targets.txt")),
-        initial(In(w, "sparse/initial")),
-        adjusted(In(w, "sparse/adjusted")),
-        points(In(w, "dense/points.ply")),
-        edited(In(w, "dense/points_edited.ply")),
-        mesh(In(w, "mesh/mesh.ply")),
+        targets(JoinPath(w, "targets/targets.txt")),
+        initial(JoinPath(w, "sparse/initial")),
+        adjusted(JoinPath(w, "sparse/adjusted")),
+        points(JoinPath(w, "dense/points.ply")),
+        edited(JoinPath(w, "dense/points_edited.ply")),
+        mesh(JoinPath(w, "mesh/mesh.ply")),
         control_input(control ? std::vector<std::string>{c.control}
                               : std::vector<std::string>{}) {}
 
@@ -153,7 +149,7 @@ void StageMaker::AddFrontEnd() {
          "targets",
          With(db_images,
               {{"output_path", targets},
-               {"report_path", In(w, "targets/targets.json")},
+               {"report_path", JoinPath(w, "targets/targets.json")},
                {"num_threads", threads}}),
          true,
          {targets},
@@ -194,7 +190,7 @@ void StageMaker::AddPairStages() {
        true,
        {c.database},
        {}});
-  const std::string tie_report = In(w, "pipeline/tiepoints.json");
+  const std::string tie_report = JoinPath(w, "pipeline/tiepoints.json");
   Add({"tiepoints",
        "bayon",
        "tiepoints",
@@ -213,7 +209,7 @@ void StageMaker::AddOrientation() {
          "colmap",
          "mapper",
          With(db_images,
-              {{"output_path", In(w, "sparse/colmap_mapper")},
+              {{"output_path", JoinPath(w, "sparse/colmap_mapper")},
                {"Mapper.num_threads", threads}}),
          false,
          {initial},
@@ -234,7 +230,7 @@ void StageMaker::AddOrientation() {
        "adjust",
        adjust,
        true,
-       {In(adjusted, "adjustment.json")},
+       {JoinPath(adjusted, "adjustment.json")},
        control_input});
 }
 
@@ -249,14 +245,14 @@ void StageMaker::AddProducts() {
         {"output_path", points},
         {"num_threads", threads}},
        true,
-       {points, In(w, "dense/points.json")},
+       {points, JoinPath(w, "dense/points.json")},
        {}});
   Add({"edit",
        "bayon",
        "edit",
        {{"input_path", points},
         {"output_path", edited},
-        {"report_path", In(w, "dense/edit.json")},
+        {"report_path", JoinPath(w, "dense/edit.json")},
         {"num_threads", threads}},
        true,
        {edited},
@@ -268,7 +264,7 @@ void StageMaker::AddProducts() {
        {{"input_path", edited},
         {"sparse_path", adjusted},
         {"output_path", mesh},
-        {"report_path", In(w, "mesh/mesh.json")},
+        {"report_path", JoinPath(w, "mesh/mesh.json")},
         {"num_threads", threads}},
        true,
        {mesh},
@@ -281,30 +277,30 @@ void StageMaker::AddProducts() {
         {"database_path", c.database},
         {"input_path", adjusted},
         {"mesh_path", mesh},
-        {"output_path", In(w, "model")},
+        {"output_path", JoinPath(w, "model")},
         {"num_threads", threads}},
        true,
-       {In(w, "model/texture.json")},
+       {JoinPath(w, "model/texture.json")},
        {}});
   Add({"render",
        "bayon",
        "render",
        // The oriented model is read only for --viewpoints stations.
-       {{"model_path", In(w, "model/model.glb")},
-        {"output_path", In(w, "renders")},
+       {{"model_path", JoinPath(w, "model/model.glb")},
+        {"output_path", JoinPath(w, "renders")},
         {"input_path", adjusted},
         {"database_path", c.database},
         {"num_threads", threads}},
        true,
-       {In(w, "renders")},
+       {JoinPath(w, "renders")},
        {}});
   Add({"viewer",
        "bayon",
        "viewer",
-       {{"model_path", In(w, "model/model.glb")},
-        {"output_path", In(w, "viewer")}},
+       {{"model_path", JoinPath(w, "model/model.glb")},
+        {"output_path", JoinPath(w, "viewer")}},
        true,
-       {In(w, "viewer/index.html")},
+       {JoinPath(w, "viewer/index.html")},
        {}});
 }
 
@@ -323,42 +319,43 @@ void StageMaker::AddClosingStages() {
         }
       }
     }
-    if (fs::is_directory(In(w, "gt"))) {
-      SetStageOption(&compare, "ground_truth_path", In(w, "gt"));
+    if (fs::is_directory(JoinPath(w, "gt"))) {
+      SetStageOption(&compare, "ground_truth_path", JoinPath(w, "gt"));
     }
     Add({"compare_colmap",
          "bayon",
          "compare_colmap",
          compare,
          true,
-         {In(w, "colmap/comparison.json")},
+         {JoinPath(w, "colmap/comparison.json")},
          {}});
   }
-  if (fs::is_directory(In(w, "gt"))) {
+  if (fs::is_directory(JoinPath(w, "gt"))) {
     // gt/ is a synthetic workspace's truth (with the true surface and
     // held-out views) or a benchmark's cameras (import_ground_truth).
-    StageOptions evaluate = {{"ground_truth_path", In(w, "gt")},
+    StageOptions evaluate = {{"ground_truth_path", JoinPath(w, "gt")},
                              {"input_path", adjusted},
-                             {"output_path", In(w, "evaluation.json")},
+                             {"output_path", JoinPath(w, "evaluation.json")},
                              {"num_threads", threads}};
-    if (fs::exists(In(w, "gt/surface.ply"))) {
+    if (fs::exists(JoinPath(w, "gt/surface.ply"))) {
       SetStageOption(&evaluate, "cloud_path", points);
       SetStageOption(&evaluate, "mesh_path", mesh);
     }
     // A truth rendered with no held-out views (synth --num_heldout_views
     // 0) has an empty gt/heldout: nothing to compare renders with.
-    if (fs::is_directory(In(w, "gt/heldout")) &&
-        ReadModel(In(w, "gt/heldout")).images.size() > 0) {
+    if (fs::is_directory(JoinPath(w, "gt/heldout")) &&
+        ReadModel(JoinPath(w, "gt/heldout")).images.size() > 0) {
       // evaluate reads the textured model as PLY (its TextureFile comment
       // names the atlas).
-      SetStageOption(&evaluate, "textured_mesh_path", In(w, "model/model.ply"));
+      SetStageOption(
+          &evaluate, "textured_mesh_path", JoinPath(w, "model/model.ply"));
     }
     Add({"evaluate",
          "bayon",
          "evaluate",
          evaluate,
          false,
-         {In(w, "evaluation.json")},
+         {JoinPath(w, "evaluation.json")},
          {}});
   }
   Add({"report",
@@ -366,7 +363,7 @@ void StageMaker::AddClosingStages() {
        "report",
        {{"workspace_path", w}},
        true,
-       {In(w, "report.html")},
+       {JoinPath(w, "report.html")},
        {}});
 }
 
