@@ -127,9 +127,9 @@ CliOptionRegistry::CliOptionRegistry(
     CLI::App* app, const std::map<std::string, std::string>& legacy)
     : app_(app), legacy_(legacy) {}
 
-std::vector<std::string> CliOptionRegistry::LegacyNames(
+std::vector<std::string> CliOptionRegistry::NamesOf(
     const std::string& name) const {
-  std::vector<std::string> names;
+  std::vector<std::string> names = {name};
   for (const auto& [old_name, new_name] : legacy_) {
     if (new_name == name) names.push_back(old_name);
   }
@@ -140,16 +140,13 @@ template <typename T>
 void CliOptionRegistry::AddOption(const std::string& name,
                                   T* value,
                                   const std::string& help) {
-  CLI::Option* option = app_->add_option("--" + name, *value, help);
-  if constexpr (std::is_same_v<T, std::vector<std::string>>) {
-    option->delimiter(',');
-  }
-  for (const std::string& old_name : LegacyNames(name)) {
-    CLI::Option* hidden = app_->add_option("--" + old_name, *value, help);
-    hidden->group("");
+  const std::vector<std::string> names = NamesOf(name);
+  for (size_t k = 0; k < names.size(); ++k) {
+    CLI::Option* option = app_->add_option("--" + names[k], *value, help);
     if constexpr (std::is_same_v<T, std::vector<std::string>>) {
-      hidden->delimiter(',');
+      option->delimiter(',');
     }
+    if (k > 0) option->group("");
   }
 }
 
@@ -186,8 +183,7 @@ void CliOptionRegistry::Add(const std::string& name,
 void CliOptionRegistry::AddChoice(const std::string& name,
                                   const Choice& choice,
                                   const std::string& help) {
-  std::vector<std::string> names = LegacyNames(name);
-  names.insert(names.begin(), name);
+  const std::vector<std::string> names = NamesOf(name);
   for (size_t k = 0; k < names.size(); ++k) {
     CLI::Option* option = app_->add_option_function<std::string>(
         "--" + names[k], choice.set, help);

@@ -100,7 +100,8 @@ class CliOptionRegistry : public OptionRegistry {
   // The option as --name, and hidden under each legacy name of it.
   template <typename T>
   void AddOption(const std::string& name, T* value, const std::string& help);
-  std::vector<std::string> LegacyNames(const std::string& name) const;
+  // `name`, then its legacy names.
+  std::vector<std::string> NamesOf(const std::string& name) const;
 
   CLI::App* app_;
   std::map<std::string, std::string> legacy_;  // old name -> name

@@ -84,10 +84,9 @@ class MultiViewReconstruction {
   const DenseOptions& options_;
   std::map<image_t, PinholeView> views_;
   std::vector<MasterState> states_;
-  // The matched masters (indices into masters_), their views and maps.
+  // The matched masters (indices into masters_) and their views.
   std::vector<int> matched_;
   std::vector<const PinholeView*> matched_views_;
-  std::vector<const DepthMap*> matched_maps_;
   std::vector<std::vector<FusionVerdict>> verdicts_;
   std::vector<FusedPoint> fused_;
   std::vector<DenseReject> verdict_of_;
@@ -217,17 +216,17 @@ void MultiViewReconstruction::EstimateDepthMaps() {
 }
 
 void MultiViewReconstruction::Fuse() {
+  std::vector<const DepthMap*> matched_maps;
   for (size_t m = 0; m < masters_.size(); ++m) {
     if (!states_[m].skipped.empty()) continue;
     matched_.push_back(static_cast<int>(m));
     matched_views_.push_back(&views_.at(masters_[m].master));
-    matched_maps_.push_back(&states_[m].map);
+    matched_maps.push_back(&states_[m].map);
   }
   fused_ =
-      FuseDepthMaps(matched_views_, matched_maps_, options_.fusion, &verdicts_);
+      FuseDepthMaps(matched_views_, matched_maps, options_.fusion, &verdicts_);
   // The depth maps are done with; the fused points and verdicts remain.
   for (MasterState& state : states_) state.map = DepthMap();
-  matched_maps_.clear();
 }
 
 void MultiViewReconstruction::ChooseSearchImages() {
