@@ -7,6 +7,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/option_registry.h"
 #include "ext/dense/dense.h"
+#include "ext/mesh/meshing.h"
 #include "tools/command.h"
 
 #include <gtest/gtest.h>
@@ -127,7 +128,7 @@ TEST(CommandOptions, AChoiceOutsideItsNamesIsRefused) {
   EXPECT_THROW(command.Parse(3, argv.data()), CLI::ParseError);
 }
 
-// The names every field of DenseOptions registers, each once.
+// The names every field of an options struct registers, each once.
 class NameRecorder : public OptionRegistry {
  public:
   void Add(const std::string& name, bool*, const std::string&) override {
@@ -151,9 +152,9 @@ class NameRecorder : public OptionRegistry {
   int duplicates = 0;
 
  protected:
-  void AddChoice(const std::string& name,
-                 const Choice&,
-                 const std::string&) override {
+  void AddText(const std::string& name,
+               const Text&,
+               const std::string&) override {
     Record(name);
   }
 
@@ -176,6 +177,49 @@ TEST(CommandOptions, DenseRegistersItsNestedOptionsUnderTheirNames) {
                            "mpgc.lsm.patch_radius",
                            "mpgc.lsm.interpolation"}) {
     EXPECT_EQ(recorder.names.count(name), 1u) << name;
+  }
+}
+
+TEST(CommandOptions, MeshRegistersEachMethodsOptionsUnderItsName) {
+  MeshOptions options;
+  NameRecorder recorder;
+  options.Register(&recorder);
+  EXPECT_EQ(recorder.duplicates, 0);
+  for (const char* name : {"method",
+                           "cylinder.axis_direction",
+                           "cylinder.metric",
+                           "poisson.depth",
+                           "colmap_poisson.depth",
+                           "delaunay_graph_cut.max_edge_factor",
+                           "normals.orientation",
+                           "cleanup.max_hole_edges"}) {
+    EXPECT_EQ(recorder.names.count(name), 1u) << name;
+  }
+}
+
+TEST(CommandOptions, TextThatIsNotTheValueIsRefusedNamingTheFlag) {
+  struct Axis {
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+    void Register(OptionRegistry* r) { r->Add("direction", &direction, ""); }
+  };
+  struct WithAxis {
+    Axis axis;
+    void Register(OptionRegistry* r) { r->AddNested("axis", &axis); }
+  };
+  for (const char* flag : {"--axis.direction", "--direction"}) {
+    WithAxis options;
+    CommandLine command("test", "test");
+    command.AddOptions(&options, {{"direction", "axis.direction"}});
+    std::vector<std::string> args = {"test", flag, "1,2"};
+    std::vector<char*> argv;
+    for (std::string& arg : args) argv.push_back(arg.data());
+    try {
+      command.Parse(3, argv.data());
+      ADD_FAILURE() << "two numbers passed as x,y,z";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                std::string(flag) + ": '1,2' is not three numbers x,y,z");
+    }
   }
 }
 

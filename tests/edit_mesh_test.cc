@@ -270,8 +270,9 @@ TEST(MeshCommand, ThreeDimensionalMethodsAndColmapPoisson) {
   const std::vector<std::vector<std::string>> runs = {
       {"advancing_front"},
       {"greedy_projection"},
-      {"poisson", "--depth", "6"},
-      {"colmap_poisson", "--colmap_depth", "6", "--colmap_trim", "0"}};
+      {"poisson", "--poisson.depth", "6"},
+      // --colmap_trim: a flag's earlier name, still accepted.
+      {"colmap_poisson", "--colmap_poisson.depth", "6", "--colmap_trim", "0"}};
   for (const std::vector<std::string>& run : runs) {
     const std::string out = dir + "/" + run[0] + ".ply";
     std::vector<std::string> args = {"mesh",
@@ -305,7 +306,7 @@ TEST(MeshCommand, ThreeDimensionalMethodsAndColmapPoisson) {
                          dir + "/estimated.ply",
                          "--method",
                          "poisson",
-                         "--depth",
+                         "--poisson.depth",
                          "6"});
   ASSERT_EQ(estimated.exit_code, 0) << estimated.output;
   EXPECT_NE(estimated.output.find("normals estimated with PCL"),
@@ -348,6 +349,30 @@ TEST(MeshCommand, BadInput) {
       "nan.ply: point 2 has a coordinate that is not a finite number",
       dir + "/nan.ply",
       {out});
+  // A nested option is named as registered, whichever name was given.
+  const std::string plain = fixture + "/plain.ply";
+  ExpectRefusedWithoutOutput(
+      {"mesh",
+       "--input_path",
+       plain,
+       "--output_path",
+       out,
+       "--cone_angle_deg",
+       "85"},
+      "cylinder.cone_angle_deg must be in [0, 80) (got 85)",
+      plain,
+      {out});
+  ExpectRefusedWithoutOutput({"mesh",
+                              "--input_path",
+                              plain,
+                              "--output_path",
+                              out,
+                              "--cylinder.axis_direction",
+                              "0,1"},
+                             "--cylinder.axis_direction: '0,1' is not three "
+                             "numbers x,y,z",
+                             plain,
+                             {out});
   // Poisson on a cloud without normals, estimation turned off.
   ExpectRefusedWithoutOutput({"mesh",
                               "--input_path",

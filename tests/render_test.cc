@@ -297,7 +297,7 @@ TEST(RenderCommand, RefusesBadInputWithOneLine) {
                 out);
   ExpectRefused(
       {"--model_path", model, "--output_path", out, "--modes", "shaded,xray"},
-      "unknown render mode 'xray'",
+      "--modes: 'xray' is not one of wireframe, shaded, textured",
       out);
   ExpectRefused(
       {"--model_path", model, "--output_path", out, "--stereo", "hologram"},

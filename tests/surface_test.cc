@@ -3,7 +3,8 @@
 // The demo's surface on the temple ring (16 x 640x480 real photographs):
 // the workspace `bayon pipeline` makes of it (tests/temple_fixture.h, dense
 // points from depth maps at half size), meshed by configs/ring.ini's
-// default, `mesh --method poisson --depth 10 --max_hole_edges 50`, and
+// default, `mesh --method poisson --poisson.depth 10
+// --cleanup.max_hole_edges 50`, and
 // carried back into the photographs: its silhouette against the temple's
 // (`evaluate --silhouette_image_path`). The full-size demo's figures are in
 // docs/benchmarks.md (scripts/demo.sh temple).
@@ -34,9 +35,9 @@ TEST(Surface, TempleRingMeshCoversTheTempleInEveryPhotograph) {
                          ws + "/dense/points_edited.ply",
                          "--method",
                          "poisson",
-                         "--depth",
+                         "--poisson.depth",
                          "10",
-                         "--max_hole_edges",
+                         "--cleanup.max_hole_edges",
                          "50",
                          "--output_path",
                          dir + "/mesh.ply",
@@ -51,8 +52,9 @@ TEST(Surface, TempleRingMeshCoversTheTempleInEveryPhotograph) {
                            std::istreambuf_iterator<char>());
   std::string section = config.substr(config.find("[mesh]"));
   section = section.substr(0, section.find("\n["));
-  for (const char* line :
-       {"method = poisson\n", "depth = 10\n", "max_hole_edges = 50\n"}) {
+  for (const char* line : {"method = poisson\n",
+                           "poisson.depth = 10\n",
+                           "cleanup.max_hole_edges = 50\n"}) {
     EXPECT_NE(section.find(line), std::string::npos) << line;
   }
   const testing::CommandResult silhouettes =

@@ -180,14 +180,23 @@ void CliOptionRegistry::Add(const std::string& name,
   AddOption(name, value, help);
 }
 
-void CliOptionRegistry::AddChoice(const std::string& name,
-                                  const Choice& choice,
-                                  const std::string& help) {
+void CliOptionRegistry::AddText(const std::string& name,
+                                const Text& text,
+                                const std::string& help) {
   const std::vector<std::string> names = NamesOf(name);
   for (size_t k = 0; k < names.size(); ++k) {
-    CLI::Option* option = app_->add_option_function<std::string>(
-        "--" + names[k], choice.set, help);
-    option->check(CLI::IsMember(choice.names))->default_str(choice.get());
+    const std::string flag = "--" + names[k];
+    auto set = [flag, set = text.set](const std::string& given) {
+      try {
+        set(given);
+      } catch (const InputError& error) {
+        ThrowInputError(flag, ": ", error.what());
+      }
+    };
+    CLI::Option* option =
+        app_->add_option_function<std::string>(flag, set, help);
+    if (!text.choices.empty()) option->check(CLI::IsMember(text.choices));
+    option->default_str(text.get());
     if (k > 0) option->group("");
   }
 }
@@ -233,34 +242,6 @@ void OrientedInput::Check() const {
   CheckDirectoryExists(image_path, "--image_path");
   CheckDirectoryExists(input_path, "--input_path");
   if (!database_path.empty()) CheckFileExists(database_path, "--database_path");
-}
-
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    const size_t begin = item.find_first_not_of(" \t");
-    if (begin == std::string::npos) continue;
-    items.push_back(
-        item.substr(begin, item.find_last_not_of(" \t") - begin + 1));
-  }
-  return items;
-}
-
-Eigen::Vector3d ParseVector(const std::string& text, const char* flag) {
-  const std::vector<std::string> items = SplitList(text);
-  Eigen::Vector3d v;
-  bool ok = items.size() == 3;
-  for (size_t i = 0; ok && i < 3; ++i) {
-    char* end = nullptr;
-    v[i] = std::strtod(items[i].c_str(), &end);
-    ok = end != items[i].c_str() && *end == '\0' && std::isfinite(v[i]);
-  }
-  if (!ok) {
-    ThrowInputError(flag, " must be three numbers x,y,z (got '", text, "')");
-  }
-  return v;
 }
 
 std::string DatabaseLogPath(const std::string& log_path,

@@ -92,9 +92,9 @@ class CliOptionRegistry : public OptionRegistry {
            const std::string& help) override;
 
  protected:
-  void AddChoice(const std::string& name,
-                 const Choice& choice,
-                 const std::string& help) override;
+  void AddText(const std::string& name,
+               const Text& text,
+               const std::string& help) override;
 
  private:
   // The option as --name, and hidden under each legacy name of it.
@@ -146,12 +146,6 @@ struct OrientedInput {
   // Checks the folders and the database that were given.
   void Check() const;
 };
-
-// "a, b,c" -> {"a", "b", "c"}: items trimmed of spaces, empty ones dropped.
-std::vector<std::string> SplitList(const std::string& text);
-
-// "x,y,z" -> vector; InputError naming `flag` otherwise.
-Eigen::Vector3d ParseVector(const std::string& text, const char* flag);
 
 // For commands on a database: `log_path` if given, else
 // <database folder>/logs/<command>.log.

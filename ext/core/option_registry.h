@@ -16,12 +16,27 @@
 
 #include "ext/core/errors.h"
 
+#include <Eigen/Core>
+
 #include <functional>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace bayon {
+
+// "a, b,c" -> {"a", "b", "c"}: items trimmed of spaces, empty ones dropped.
+std::vector<std::string> SplitList(const std::string& text);
+// The index of `name` in `names`; InputError listing them otherwise.
+size_t IndexOfName(const std::string& name,
+                   const std::vector<std::string>& names);
+template <typename T>
+std::vector<std::string> ChoiceNames(
+    const std::vector<std::pair<std::string, T>>& pairs) {
+  std::vector<std::string> names;
+  for (const auto& pair : pairs) names.push_back(pair.first);
+  return names;
+}
 
 class OptionRegistry {
  public:
@@ -44,14 +59,24 @@ class OptionRegistry {
                    std::vector<std::string>* value,
                    const std::string& help) = 0;
 
+  // A point or a direction, "x,y,z". Empty text stands for every
+  // coordinate NaN, which options use for "not given".
+  void Add(const std::string& name,
+           Eigen::Vector3d* value,
+           const std::string& help);
+  // Numbers, comma separated.
+  void Add(const std::string& name,
+           std::vector<double>* value,
+           const std::string& help);
+
   // An enumeration given by name; `names` holds every value's.
   template <typename Enum>
   void AddChoice(const std::string& name,
                  Enum* value,
                  const std::vector<std::pair<std::string, Enum>>& names,
                  const std::string& help) {
-    Choice choice;
-    for (const auto& [text, e] : names) choice.names.push_back(text);
+    Text choice;
+    choice.choices = ChoiceNames(names);
     choice.get = [value, names] {
       for (const auto& [text, e] : names) {
         if (e == *value) return text;
@@ -59,26 +84,57 @@ class OptionRegistry {
       return std::string();
     };
     choice.set = [value, names](const std::string& text) {
-      for (const auto& [t, e] : names) {
-        if (t == text) *value = e;
-      }
+      *value = names[IndexOfName(text, ChoiceNames(names))].second;
     };
-    AddChoice(name, choice, help);
+    AddText(name, choice, help);
   }
+
+  // Several values of an enumeration, comma separated.
+  template <typename Enum>
+  void AddChoices(const std::string& name,
+                  std::vector<Enum>* values,
+                  const std::vector<std::pair<std::string, Enum>>& names,
+                  const std::string& help) {
+    Text choices;
+    choices.get = [values, names] {
+      std::string text;
+      for (Enum value : *values) {
+        for (const auto& [t, e] : names) {
+          if (e == value) text += (text.empty() ? "" : ",") + t;
+        }
+      }
+      return text;
+    };
+    choices.set = [values, names](const std::string& text) {
+      std::vector<Enum> given;
+      for (const std::string& item : SplitList(text)) {
+        given.push_back(names[IndexOfName(item, ChoiceNames(names))].second);
+      }
+      *values = given;
+    };
+    AddText(name, choices, help);
+  }
+  // Switches, each turned on by naming it in a comma-separated list.
+  void AddSwitches(const std::string& name,
+                   const std::vector<std::pair<std::string, bool*>>& switches,
+                   const std::string& help);
 
   // The fields of a nested options struct, as `name.field`.
   template <typename Options>
   void AddNested(const std::string& name, Options* options);
 
  protected:
-  struct Choice {
-    std::vector<std::string> names;
+  // A value the command line and configs hold as text: `get` writes it,
+  // `set` reads it and throws InputError (without the option's name) for
+  // text it cannot read. `choices`, where not empty: every text allowed.
+  struct Text {
+    std::vector<std::string> choices;
     std::function<std::string()> get;
     std::function<void(const std::string&)> set;
   };
-  virtual void AddChoice(const std::string& name,
-                         const Choice& choice,
-                         const std::string& help) = 0;
+  virtual void AddText(const std::string& name,
+                       const Text& text,
+                       const std::string& help) = 0;
 
  private:
   // Forwards every field to `parent` with `prefix.` in front of its name.
@@ -116,10 +172,10 @@ class OptionRegistry::Prefixed : public OptionRegistry {
   }
 
  protected:
-  void AddChoice(const std::string& name,
-                 const Choice& choice,
-                 const std::string& help) override {
-    parent_->AddChoice(Name(name), choice, help);
+  void AddText(const std::string& name,
+               const Text& text,
+               const std::string& help) override {
+    parent_->AddText(Name(name), text, help);
   }
 
  private:
@@ -144,6 +200,11 @@ std::vector<std::pair<std::string, Enum>> ChoicesOf(
   for (Enum value : values) choices.emplace_back(name_of(value), value);
   return choices;
 }
+
+// "1.5, 2,3" -> {1.5, 2, 3}; InputError for what is not a number.
+std::vector<double> ParseNumbers(const std::string& text);
+// The shortest text that reads back as the same numbers, comma separated.
+std::string FormatNumbers(const std::vector<double>& values);
 
 // Checks a nested options struct; its complaint names the field as the
 // registry does, `name.field`.

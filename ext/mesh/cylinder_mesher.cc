@@ -141,29 +141,49 @@ std::string CylinderMetricName(CylinderMetric metric) {
   return metric == CylinderMetric::kProfile ? "profile" : "mean_radius";
 }
 
-CylinderMetric ParseCylinderMetric(const std::string& name) {
-  if (name == "profile") return CylinderMetric::kProfile;
-  if (name == "mean_radius") return CylinderMetric::kMeanRadius;
-  ThrowInputError(
-      "--cylinder_metric must be profile or mean_radius (got '", name, "')");
+void CylinderMeshOptions::Register(OptionRegistry* r) {
+  r->Add("axis_direction",
+         &axis_direction,
+         "The object's vertical axis, x,y,z (datum z)");
+  r->Add("axis_point",
+         &axis_point,
+         "A point on the axis, x,y,z (empty: the centroid)");
+  r->AddChoice("metric",
+               &metric,
+               ChoicesOf<CylinderMetric>(
+                   CylinderMetricName,
+                   {CylinderMetric::kProfile, CylinderMetric::kMeanRadius}),
+               "profile or mean_radius");
+  r->Add("cone_angle_deg",
+         &cone_angle_deg,
+         "Tilt of the projection above the horizontal (0 = the paper's "
+         "cylinder; 45 unfolds flat ledge tops)");
+  r->Add("seam_band_deg",
+         &seam_band_deg,
+         "Band copied across the +-180 degree seam");
+  r->Add("max_edge_factor",
+         &max_edge_factor,
+         "Drop triangles with an edge longer than this many local spacings");
+  r->Add(
+      "min_angle_deg", &min_angle_deg, "Drop triangles with a smaller angle");
 }
 
 void CylinderMeshOptions::Check() const {
   CheckOption(axis_direction.allFinite() && axis_direction.norm() > 0,
-              "--axis_direction",
+              "axis_direction",
               "a non-zero vector",
               axis_direction.transpose());
   CheckOption(cone_angle_deg >= 0 && cone_angle_deg < 80,
-              "--cone_angle_deg",
+              "cone_angle_deg",
               "in [0, 80)",
               cone_angle_deg);
   CheckOption(seam_band_deg > 0 && seam_band_deg <= 90,
-              "--seam_band_deg",
+              "seam_band_deg",
               "in (0, 90]",
               seam_band_deg);
-  CheckOption(max_edge_factor > 1, "--max_edge_factor", "> 1", max_edge_factor);
+  CheckOption(max_edge_factor > 1, "max_edge_factor", "> 1", max_edge_factor);
   CheckOption(min_angle_deg >= 0 && min_angle_deg < 30,
-              "--min_angle_deg",
+              "min_angle_deg",
               "in [0, 30)",
               min_angle_deg);
 }

@@ -51,6 +51,7 @@
 // parts of the object fold in the plane.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/point_cloud.h"
 
 #include <Eigen/Core>
@@ -62,7 +63,6 @@ namespace bayon {
 
 enum class CylinderMetric { kProfile, kMeanRadius };
 std::string CylinderMetricName(CylinderMetric metric);
-CylinderMetric ParseCylinderMetric(const std::string& name);
 
 struct CylinderMeshOptions {
   Eigen::Vector3d axis_direction = Eigen::Vector3d::UnitZ();
@@ -79,6 +79,7 @@ struct CylinderMeshOptions {
   double seam_band_deg = 7.2;
   double max_edge_factor = 4.0;
   double min_angle_deg = 0.1;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

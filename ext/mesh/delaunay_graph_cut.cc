@@ -246,15 +246,27 @@ std::vector<bool> CutGraph(const Delaunay& dt, const CellGraph& cells) {
 
 }  // namespace
 
+void DelaunayGraphCutOptions::Register(OptionRegistry* r) {
+  r->Add("min_distance_factor",
+         &min_distance_factor,
+         "Points closer than this many spacings are one vertex");
+  r->Add("max_edge_factor",
+         &max_edge_factor,
+         "Leave out faces with an edge longer than this many spacings (0 = "
+         "none)");
+  r->Add("inside_depth_factor",
+         &inside_depth_factor,
+         "Rays end this many spacings behind their points, inside");
+}
+
 void DelaunayGraphCutOptions::Check() const {
   CheckOption(min_distance_factor >= 0,
-              "--min_distance_factor",
+              "min_distance_factor",
               ">= 0",
               min_distance_factor);
-  CheckOption(
-      max_edge_factor >= 0, "--max_edge_factor", ">= 0", max_edge_factor);
+  CheckOption(max_edge_factor >= 0, "max_edge_factor", ">= 0", max_edge_factor);
   CheckOption(inside_depth_factor > 0,
-              "--inside_depth_factor",
+              "inside_depth_factor",
               "> 0",
               inside_depth_factor);
 }

@@ -423,19 +423,34 @@ PointCloud GatherPoints(const PointCloud& cloud,
 
 }  // namespace
 
+void MeshCleanupOptions::Register(OptionRegistry* r) {
+  r->Add("merge_distance_m",
+         &merge_distance_m,
+         "Merge vertices closer than this (0 = identical only)");
+  r->Add("min_component_faces",
+         &min_component_faces,
+         "Drop components with fewer faces ...");
+  r->Add("min_component_fraction",
+         &min_component_fraction,
+         "... or fewer than this share of the largest");
+  r->Add("max_hole_edges",
+         &max_hole_edges,
+         "Fill holes with at most this many boundary edges (0 = no)");
+}
+
 void MeshCleanupOptions::Check() const {
   CheckOption(
-      merge_distance_m >= 0, "--merge_distance_m", ">= 0", merge_distance_m);
+      merge_distance_m >= 0, "merge_distance_m", ">= 0", merge_distance_m);
   CheckOption(min_component_fraction >= 0 && min_component_fraction <= 1,
-              "--min_component_fraction",
+              "min_component_fraction",
               "in [0, 1]",
               min_component_fraction);
   CheckOption(min_component_faces >= 0,
-              "--min_component_faces",
+              "min_component_faces",
               ">= 0",
               min_component_faces);
   CheckOption(max_hole_edges >= 0 && max_hole_edges <= 2000,
-              "--max_hole_edges",
+              "max_hole_edges",
               "in [0, 2000]",
               max_hole_edges);
 }

@@ -20,6 +20,7 @@
 // unreferenced vertices go.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/point_cloud.h"
 
 namespace bayon {
@@ -33,6 +34,7 @@ struct MeshCleanupOptions {
   int min_component_faces = 20;
   // Fill holes whose boundary has at most this many edges; 0 = off.
   int max_hole_edges = 0;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

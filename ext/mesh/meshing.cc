@@ -32,42 +32,41 @@ std::string MeshMethodName(MeshMethod method) {
   return "?";
 }
 
-MeshMethod ParseMeshMethod(const std::string& name) {
-  for (MeshMethod method : {MeshMethod::kCylinder,
-                            MeshMethod::kGreedyProjection,
-                            MeshMethod::kPoisson,
-                            MeshMethod::kAdvancingFront,
-                            MeshMethod::kColmapPoisson,
-                            MeshMethod::kDelaunayGraphCut}) {
-    if (name == MeshMethodName(method)) return method;
-  }
-  ThrowInputError(
-      "--method must be one of cylinder, greedy_projection, "
-      "poisson, advancing_front, colmap_poisson, delaunay_graph_cut (got '",
-      name,
-      "')");
+void GreedyProjectionOptions::Register(OptionRegistry* r) {
+  r->Add("search_radius_factor",
+         &search_radius_factor,
+         "Search radius in point spacings");
+  r->Add("mu", &mu, "Longest edge in local spacings");
+  r->Add("max_nearest_neighbors",
+         &max_nearest_neighbors,
+         "Neighbours searched per point");
+  r->Add("max_surface_angle_deg",
+         &max_surface_angle_deg,
+         "Neighbours whose normals differ more are left out");
+  r->Add("min_angle_deg", &min_angle_deg, "Smallest triangle angle");
+  r->Add("max_angle_deg", &max_angle_deg, "Largest triangle angle");
 }
 
 void GreedyProjectionOptions::Check() const {
   CheckOption(search_radius_factor > 1,
-              "--search_radius_factor",
+              "search_radius_factor",
               "> 1",
               search_radius_factor);
-  CheckOption(mu > 1, "--mu", "> 1", mu);
+  CheckOption(mu > 1, "mu", "> 1", mu);
   CheckOption(max_nearest_neighbors >= 10,
-              "--max_nearest_neighbors",
+              "max_nearest_neighbors",
               ">= 10",
               max_nearest_neighbors);
   CheckOption(min_angle_deg > 0 && min_angle_deg < 60,
-              "--gp_min_angle_deg",
+              "min_angle_deg",
               "in (0, 60)",
               min_angle_deg);
   CheckOption(max_angle_deg > 60 && max_angle_deg < 180,
-              "--gp_max_angle_deg",
+              "max_angle_deg",
               "in (60, 180)",
               max_angle_deg);
   CheckOption(max_surface_angle_deg > 0 && max_surface_angle_deg < 180,
-              "--max_surface_angle_deg",
+              "max_surface_angle_deg",
               "in (0, 180)",
               max_surface_angle_deg);
 }
@@ -81,44 +80,91 @@ void CheckEnoughPointsToClose(const PointCloud& cloud,
                     cloud.size(),
                     " points are too sparse to close a surface (",
                     kMinPoints,
-                    " or more; the cylinder, --method cylinder, needs fewer)");
+                    " or more; the cylinder, method cylinder, needs fewer)");
   }
 }
 
+void PoissonOptions::Register(OptionRegistry* r) {
+  r->Add("depth", &depth, "Octree depth");
+  r->Add("samples_per_node", &samples_per_node, "Points per octree leaf");
+  r->Add("point_weight", &point_weight, "Interpolation weight");
+  r->Add("trim_distance_factor",
+         &trim_distance_factor,
+         "Drop faces this many spacings from the points (0 = keep)");
+}
+
 void PoissonOptions::Check() const {
-  CheckOption(depth >= 4 && depth <= 14, "--depth", "in [4, 14]", depth);
+  CheckOption(depth >= 4 && depth <= 14, "depth", "in [4, 14]", depth);
   CheckOption(
-      samples_per_node >= 1, "--samples_per_node", ">= 1", samples_per_node);
-  CheckOption(point_weight >= 0, "--point_weight", ">= 0", point_weight);
+      samples_per_node >= 1, "samples_per_node", ">= 1", samples_per_node);
+  CheckOption(point_weight >= 0, "point_weight", ">= 0", point_weight);
   CheckOption(trim_distance_factor >= 0,
-              "--trim_distance_factor",
+              "trim_distance_factor",
               ">= 0 (0 = no trimming)",
               trim_distance_factor);
 }
 
+void AdvancingFrontOptions::Register(OptionRegistry* r) {
+  r->Add(
+      "radius_ratio_bound", &radius_ratio_bound, "CGAL's radius ratio bound");
+  r->Add("beta", &beta, "CGAL's beta (dihedral angle / pi)");
+}
+
 void AdvancingFrontOptions::Check() const {
-  CheckOption(radius_ratio_bound > 0,
-              "--radius_ratio_bound",
-              "> 0",
-              radius_ratio_bound);
-  CheckOption(beta > 0 && beta < 1, "--beta", "in (0, 1)", beta);
+  CheckOption(
+      radius_ratio_bound > 0, "radius_ratio_bound", "> 0", radius_ratio_bound);
+  CheckOption(beta > 0 && beta < 1, "beta", "in (0, 1)", beta);
+}
+
+void ColmapPoissonOptions::Register(OptionRegistry* r) {
+  r->Add("depth", &depth, "PoissonMeshing.depth");
+  r->Add("point_weight", &point_weight, "PoissonMeshing.point_weight");
+  r->Add("trim", &trim, "PoissonMeshing.trim");
+  r->Add("work_path", &work_path, "Keep fused.ply, COLMAP's mesh and log here");
 }
 
 void ColmapPoissonOptions::Check() const {
-  CheckOption(depth >= 4 && depth <= 14, "--colmap_depth", "in [4, 14]", depth);
-  CheckOption(point_weight >= 0, "--colmap_point_weight", ">= 0", point_weight);
-  CheckOption(trim >= 0, "--colmap_trim", ">= 0", trim);
+  CheckOption(depth >= 4 && depth <= 14, "depth", "in [4, 14]", depth);
+  CheckOption(point_weight >= 0, "point_weight", ">= 0", point_weight);
+  CheckOption(trim >= 0, "trim", ">= 0", trim);
+}
+
+void MeshOptions::Register(OptionRegistry* r) {
+  r->AddChoice("method",
+               &method,
+               ChoicesOf<MeshMethod>(MeshMethodName,
+                                     {MeshMethod::kCylinder,
+                                      MeshMethod::kGreedyProjection,
+                                      MeshMethod::kPoisson,
+                                      MeshMethod::kAdvancingFront,
+                                      MeshMethod::kColmapPoisson,
+                                      MeshMethod::kDelaunayGraphCut}),
+               "cylinder, greedy_projection, poisson, advancing_front, "
+               "delaunay_graph_cut; colmap_poisson (stock COLMAP, for "
+               "comparison)");
+  r->AddNested("cylinder", &cylinder);
+  r->AddNested("greedy_projection", &greedy_projection);
+  r->AddNested("poisson", &poisson);
+  r->AddNested("advancing_front", &advancing_front);
+  r->AddNested("colmap_poisson", &colmap_poisson);
+  r->AddNested("delaunay_graph_cut", &delaunay_graph_cut);
+  r->Add("estimate_normals",
+         &estimate_normals,
+         "1: estimate missing normals (PCL); 0: refuse such clouds");
+  r->AddNested("normals", &normals);
+  r->AddNested("cleanup", &cleanup);
+  r->Add("num_threads", &num_threads, "-1 = all cores");
 }
 
 void MeshOptions::Check() const {
-  colmap_poisson.Check();
-  cylinder.Check();
-  greedy_projection.Check();
-  poisson.Check();
-  advancing_front.Check();
-  delaunay_graph_cut.Check();
-  normals.Check();
-  cleanup.Check();
+  CheckNested("colmap_poisson", colmap_poisson);
+  CheckNested("cylinder", cylinder);
+  CheckNested("greedy_projection", greedy_projection);
+  CheckNested("poisson", poisson);
+  CheckNested("advancing_front", advancing_front);
+  CheckNested("delaunay_graph_cut", delaunay_graph_cut);
+  CheckNested("normals", normals);
+  CheckNested("cleanup", cleanup);
 }
 
 std::string MeshReport::Summary() const {

@@ -55,10 +55,8 @@ enum class MeshMethod {
   kDelaunayGraphCut
 };
 // "cylinder", "greedy_projection", "poisson", "advancing_front",
-// "colmap_poisson"; the parser
-// throws InputError listing the choices.
+// "colmap_poisson", "delaunay_graph_cut".
 std::string MeshMethodName(MeshMethod method);
-MeshMethod ParseMeshMethod(const std::string& name);
 
 struct GreedyProjectionOptions {
   // Neighbourhood radius as a multiple of the median nearest-neighbour
@@ -70,6 +68,7 @@ struct GreedyProjectionOptions {
   double max_surface_angle_deg = 45;
   double min_angle_deg = 10;
   double max_angle_deg = 120;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -84,6 +83,7 @@ struct PoissonOptions {
   // input point are removed with their faces: the surface Poisson invents
   // over holes and beyond the cloud's border. 0 = keep all.
   double trim_distance_factor = 4.0;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -95,6 +95,7 @@ struct AdvancingFrontOptions {
   // ... and the largest dihedral angle, in radians over pi, between
   // neighbouring triangles (0.52 ~ 94 degrees).
   double beta = 0.52;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -112,6 +113,7 @@ struct DelaunayGraphCutOptions {
   // 2.6, 25 gives 74.8 % at 1.9, 15 gives 64.9 % at 1.7 (the cylinder: 68.3 %
   // at 2.0); temple-ring's silhouettes: IoU 0.56 with all, 0.82 with 25.
   double max_edge_factor = 25;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -128,6 +130,7 @@ struct ColmapPoissonOptions {
   // Where fused.ply, meshed-poisson.ply and COLMAP's log go; empty: a
   // temporary folder, removed afterwards.
   std::string work_path;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -150,6 +153,7 @@ struct MeshOptions {
   bool estimate_normals = true;
   MeshCleanupOptions cleanup;
   int num_threads = -1;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

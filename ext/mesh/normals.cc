@@ -26,16 +26,19 @@ std::string NormalOrientationName(NormalOrientation orientation) {
   return orientation == NormalOrientation::kMst ? "mst" : "outward";
 }
 
-NormalOrientation ParseNormalOrientation(const std::string& name) {
-  if (name == "mst") return NormalOrientation::kMst;
-  if (name == "outward") return NormalOrientation::kOutward;
-  ThrowInputError(
-      "--normal_orientation must be mst or outward (got '", name, "')");
+void NormalEstimationOptions::Register(OptionRegistry* r) {
+  r->Add("num_neighbors", &num_neighbors, "Neighbours for normal estimation");
+  r->AddChoice("orientation",
+               &orientation,
+               ChoicesOf<NormalOrientation>(
+                   NormalOrientationName,
+                   {NormalOrientation::kMst, NormalOrientation::kOutward}),
+               "mst or outward");
 }
 
 void NormalEstimationOptions::Check() const {
   CheckOption(num_neighbors >= 3 && num_neighbors <= 500,
-              "--normal_neighbors",
+              "num_neighbors",
               "in [3, 500]",
               num_neighbors);
 }

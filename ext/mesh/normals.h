@@ -12,6 +12,7 @@
 //            star-shaped objects (a tower), wrong in concave parts.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/point_cloud.h"
 
 #include <string>
@@ -20,12 +21,13 @@ namespace bayon {
 
 enum class NormalOrientation { kMst, kOutward };
 std::string NormalOrientationName(NormalOrientation orientation);
-NormalOrientation ParseNormalOrientation(const std::string& name);
 
 struct NormalEstimationOptions {
   int num_neighbors = 24;
   NormalOrientation orientation = NormalOrientation::kMst;
   int num_threads = -1;
+  // num_neighbors and orientation; num_threads is the caller's.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

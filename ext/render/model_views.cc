@@ -149,16 +149,7 @@ const cv::Mat& ImageOf(const ModeImages& images, RenderMode mode) {
 
 }  // namespace
 
-RenderMode ParseRenderMode(const std::string& name) {
-  if (name == "wireframe") return RenderMode::kWireframe;
-  if (name == "shaded") return RenderMode::kShaded;
-  if (name == "textured") return RenderMode::kTextured;
-  ThrowInputError("unknown render mode '",
-                  name,
-                  "' (choose from wireframe, shaded, textured)");
-}
-
-const char* RenderModeName(RenderMode mode) {
+std::string RenderModeName(RenderMode mode) {
   switch (mode) {
     case RenderMode::kWireframe:
       return "wireframe";
@@ -170,20 +161,91 @@ const char* RenderModeName(RenderMode mode) {
   return "textured";
 }
 
+void ModelRenderOptions::Register(OptionRegistry* r) {
+  const auto render_modes = ChoicesOf<RenderMode>(
+      RenderModeName,
+      {RenderMode::kWireframe, RenderMode::kShaded, RenderMode::kTextured});
+  r->AddChoices("modes",
+                &modes,
+                render_modes,
+                "Comma-separated: wireframe, shaded, textured (textured is "
+                "left out by default for a model without texture)");
+  r->Add("wireframe_on_shaded",
+         &wireframe_on_shaded,
+         "1: wireframe lines on the shaded view instead of white");
+  r->AddSwitches("stereo",
+                 {{"anaglyph", &anaglyph},
+                  {"side_by_side", &side_by_side},
+                  {"interleaved", &interleaved}},
+                 "Comma-separated: anaglyph, side_by_side, interleaved "
+                 "(default none)");
+  r->AddChoice("stereo_mode",
+               &stereo_mode,
+               render_modes,
+               "Mode of the stereo images (default textured, shaded for a "
+               "model without texture)");
+  r->Add("stereo_base",
+         &stereo.base_m,
+         "Stereo base in metres (0 = 1/30 of the nearest model distance)");
+  r->AddChoice("anaglyph_type",
+               &anaglyph_type,
+               {{"color", AnaglyphType::kColor}, {"gray", AnaglyphType::kGray}},
+               "color or gray");
+  r->Add("supersampling",
+         &supersampling,
+         "Samples per pixel along each axis (anti-aliasing)");
+  r->Add("sun_elevation_deg",
+         &sun_elevation_deg,
+         "shaded: sun above the horizontal (degrees)");
+  r->Add("sun_azimuth_deg",
+         &sun_azimuth_deg,
+         "shaded: sun to the left of the viewer's direction (degrees)");
+  r->Add("up",
+         &up,
+         "World vertical x,y,z (bayon's datum: z; with stations viewpoints "
+         "and no up given, the cameras' mean image up)");
+  r->Add("num_threads", &num_threads, "-1 = all cores");
+}
+
+void ModelRenderOptions::FitToModel(const std::string& model_path,
+                                    bool has_atlas,
+                                    bool modes_given,
+                                    bool stereo_mode_given) {
+  if (!stereo_mode_given) {
+    stereo_mode = has_atlas ? RenderMode::kTextured : RenderMode::kShaded;
+  }
+  if (has_atlas) return;
+  auto textured = std::find(modes.begin(), modes.end(), RenderMode::kTextured);
+  if (textured != modes.end()) {
+    if (modes_given) {
+      ThrowInputError(model_path,
+                      ": the model has no texture, so there is no textured "
+                      "mode (choose modes wireframe,shaded)");
+    }
+    LOG(INFO) << model_path << " has no texture: textured mode left out";
+    modes.erase(textured);
+  }
+  if (HasStereo() && stereo_mode == RenderMode::kTextured) {
+    ThrowInputError(model_path,
+                    ": the model has no texture, so no textured stereo "
+                    "(choose stereo_mode shaded or wireframe)");
+  }
+}
+
 void ModelRenderOptions::Check(bool has_atlas) const {
   if (modes.empty() && !HasStereo()) {
-    ThrowInputError("--modes: nothing to render (no mode and no stereo)");
+    ThrowInputError("modes: nothing to render (no mode and no stereo)");
   }
   CheckOption(supersampling >= 1 && supersampling <= 8,
-              "--supersampling",
+              "supersampling",
               "1 to 8",
               supersampling);
   CheckOption(sun_elevation_deg > 0 && sun_elevation_deg <= 90,
-              "--sun_elevation_deg",
+              "sun_elevation_deg",
               "in (0, 90]",
               sun_elevation_deg);
   CheckOption(up.allFinite() && up.norm() > 1e-9,
-              "--up",
+              "up",
               "a non-zero vector",
               up.transpose());
   if (HasStereo()) stereo.Check();
@@ -217,10 +279,10 @@ ModelRenderSummary RenderModelViews(
                       viewpoint.view.camera.width,
                       " x ",
                       viewpoint.view.camera.height,
-                      " pixels at --supersampling ",
+                      " pixels at supersampling ",
                       options.supersampling,
-                      " is too large to render (lower --supersampling, "
-                      "--max_image_size or --width/--height)");
+                      " is too large to render (lower supersampling, "
+                      "max_image_size or width/height)");
     }
   }
   Timer timer;

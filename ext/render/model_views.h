@@ -28,9 +28,8 @@
 namespace bayon {
 
 enum class RenderMode { kWireframe, kShaded, kTextured };
-// "wireframe", "shaded", "textured"; throws InputError for other names.
-RenderMode ParseRenderMode(const std::string& name);
-const char* RenderModeName(RenderMode mode);
+// "wireframe", "shaded", "textured".
+std::string RenderModeName(RenderMode mode);
 
 struct ModelRenderOptions {
   // Modes rendered for every viewpoint, each as <mode>_<view>.png.
@@ -60,6 +59,15 @@ struct ModelRenderOptions {
   Eigen::Vector3f line_bgr = Eigen::Vector3f(0.1f, 0.1f, 0.1f);
   int num_threads = -1;
   bool HasStereo() const { return anaglyph || side_by_side || interleaved; }
+  // Every field but the colours; the stereo forms as one list, `stereo`.
+  void Register(OptionRegistry* registry);
+  // The modes a model has: where it has no texture, the textured mode is
+  // left out of the modes and the stereo is shaded, unless they were
+  // asked for (`*_given`), which is refused.
+  void FitToModel(const std::string& model_path,
+                  bool has_atlas,
+                  bool modes_given,
+                  bool stereo_mode_given);
   // Throws InputError naming the option; also when a textured mode is asked
   // of a model without an atlas (has_atlas false).
   void Check(bool has_atlas) const;

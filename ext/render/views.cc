@@ -65,25 +65,41 @@ double FocalLengthPx(const RenderView& view) {
 
 }  // namespace
 
+void OrbitOptions::Register(OptionRegistry* r) {
+  r->Add("num_views", &num_views, "orbit: number of cameras");
+  r->Add("elevation_deg",
+         &elevation_deg,
+         "orbit: angle of the cameras above the model's centre");
+  r->Add("start_azimuth_deg",
+         &start_azimuth_deg,
+         "orbit: azimuth of the first camera (from x, counter-clockwise seen "
+         "from above; -90 = looking along +y)");
+  r->Add("width", &width, "orbit: image width in pixels");
+  r->Add("height", &height, "orbit: image height in pixels");
+  r->Add("fov_deg", &fov_deg, "orbit: horizontal field of view (degrees)");
+  r->Add(
+      "fill", &fill, "orbit: share of the frame the model fills (0.05 to 1)");
+}
+
 void OrbitOptions::Check() const {
-  CheckOption(num_views >= 1, "--num_views", ">= 1", num_views);
+  CheckOption(num_views >= 1, "num_views", ">= 1", num_views);
   CheckOption(std::abs(elevation_deg) <= 89,
-              "--elevation_deg",
+              "elevation_deg",
               "between -89 and 89",
               elevation_deg);
-  CheckOption(width >= 8 && width <= 16384, "--width", "8 to 16384", width);
-  CheckOption(height >= 8 && height <= 16384, "--height", "8 to 16384", height);
-  CheckOption(fov_deg > 1 && fov_deg < 170, "--fov_deg", "1 to 170", fov_deg);
-  CheckOption(fill > 0.05 && fill <= 1, "--fill", "in (0.05, 1]", fill);
+  CheckOption(width >= 8 && width <= 16384, "width", "8 to 16384", width);
+  CheckOption(height >= 8 && height <= 16384, "height", "8 to 16384", height);
+  CheckOption(fov_deg > 1 && fov_deg < 170, "fov_deg", "1 to 170", fov_deg);
+  CheckOption(fill > 0.05 && fill <= 1, "fill", "in (0.05, 1]", fill);
   CheckOption(up.allFinite() && up.norm() > 1e-9,
-              "--up",
+              "up",
               "a non-zero vector",
               up.transpose());
 }
 
 void StereoOptions::Check() const {
   CheckOption(base_m >= 0 && std::isfinite(base_m),
-              "--stereo_base",
+              "stereo_base",
               ">= 0 (0 = automatic)",
               base_m);
   CheckOption(base_ratio > 0 && base_ratio < 1,
@@ -164,11 +180,20 @@ std::vector<Viewpoint> OrbitViewpoints(
   return viewpoints;
 }
 
+Eigen::Vector3d MeanImageUp(const Scene& scene) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const auto& [image_id, image] : scene.images) {
+    sum += image.cam_from_world.rotation.inverse() * Eigen::Vector3d(0, -1, 0);
+  }
+  return sum.norm() > 1e-6 ? Eigen::Vector3d(sum.normalized())
+                           : Eigen::Vector3d::Zero();
+}
+
 std::vector<Viewpoint> StationViewpoints(
     const Scene& scene,
     const std::vector<Eigen::Vector3d>& points,
     int max_image_size) {
-  CheckOption(max_image_size >= 0, "--max_image_size", ">= 0", max_image_size);
+  CheckOption(max_image_size >= 0, "max_image_size", ">= 0", max_image_size);
   std::vector<Viewpoint> viewpoints;
   std::set<std::string> names;
   for (const auto& [image_id, image] : scene.images) {

@@ -8,6 +8,7 @@
 // given (`up`), z in bayon's datums.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/scene.h"
 #include "ext/render/mesh_renderer.h"
 
@@ -47,6 +48,8 @@ struct OrbitOptions {
   // distance is the smallest at which every vertex lies inside that share.
   double fill = 0.8;
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  // Every field but `up`, which the caller shares with the lighting.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -59,6 +62,11 @@ std::vector<Viewpoint> OrbitViewpoints(
 // ('/' and the extension replaced), with their cameras scaled so that the
 // longer side has at most `max_image_size` pixels (0: full size). Images
 // that see none of the points are left out.
+// The photographer's vertical: the mean of the cameras' image up (-y) in
+// the world; what lights a model from above whose datum, from relative
+// orientation, has no known vertical. Zero for a model without images.
+Eigen::Vector3d MeanImageUp(const Scene& scene);
+
 std::vector<Viewpoint> StationViewpoints(
     const Scene& scene,
     const std::vector<Eigen::Vector3d>& points,

@@ -101,14 +101,14 @@ print("%-34s %8.2f %8.2f %8.2f %8.1f%% %6.1f%% %6.1f%% %6d" % (
     100 * o["tops"]["completeness_fraction"], m["topology"]["boundary_loops"]))
 PY
   }
-  tower_row "poisson 10, holes <= 50 (ring.ini)" --method poisson --depth 10 \
-    --max_hole_edges 50
+  tower_row "poisson 10, holes <= 50 (ring.ini)" --method poisson --poisson.depth 10 \
+    --cleanup.max_hole_edges 50
   tower_row "delaunay_graph_cut" --method delaunay_graph_cut \
     --sparse_path "$tower/model"
   tower_row "delaunay_graph_cut, no edge limit" --method delaunay_graph_cut \
-    --sparse_path "$tower/model" --dgc_max_edge_factor 0
+    --sparse_path "$tower/model" --delaunay_graph_cut.max_edge_factor 0
   tower_row "cylinder" --method cylinder
-  tower_row "poisson depth 10" --method poisson --depth 10
+  tower_row "poisson depth 10" --method poisson --poisson.depth 10
 else
   echo "(the rendered tower's dense cloud: run scripts/bench.sh dense first)"
 fi

@@ -41,7 +41,7 @@ timed "$tower/dense" "$BAYON" dense --image_path "$tower/ws/images" \
   --input_path "$tower/model" --output_path "$tower/dense/points.ply" \
   --num_threads "$threads"
 timed "$tower/mesh" "$BAYON" mesh --input_path "$tower/dense/points.ply" \
-  --output_path "$tower/mesh/mesh.ply" --method cylinder --axis_point 0,0,0
+  --output_path "$tower/mesh/mesh.ply" --method cylinder --cylinder.axis_point 0,0,0
 
 # json_number FILE KEY: the first number stored under KEY.
 json_number() {
