@@ -561,10 +561,9 @@ class AdjustBadInput : public ::testing::Test {
 TEST_F(AdjustBadInput, DeterminabilityLimitsOutOfRange) {
   ExpectRefused("",
                 {"--max_exterior_correlation", "1.5"},
-                "AdjustmentOptions.max_exterior_correlation");
-  ExpectRefused("",
-                {"--max_interior_sigma", "0"},
-                "AdjustmentOptions.max_interior_sigma");
+                "max_exterior_correlation must be");
+  ExpectRefused(
+      "", {"--max_interior_sigma", "0"}, "max_interior_sigma must be");
 }
 
 TEST_F(AdjustBadInput, NoControlWhereTheDatumNeedsIt) {

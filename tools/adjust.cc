@@ -18,9 +18,6 @@ namespace bayon {
 
 int RunAdjust(int argc, char** argv) {
   std::string database_path, input_path, output_path, control_path, log_path;
-  std::string datum = "auto", self_calibration = "significant";
-  std::string camera_model = "brown_beyer", blunders = "robust";
-  std::string tie_points = "auto";
   bool overwrite = false;
   AdjustmentInputOptions input_options;
   AdjustmentOptions options;
@@ -48,108 +45,13 @@ int RunAdjust(int argc, char** argv) {
                  "control/ folder: points.txt, observations.txt, "
                  "distances.txt");
   app.add_option("--overwrite", overwrite, "Replace an existing output folder");
-  app.add_option("--datum",
-                 datum,
-                 "auto (control with 3+ control points, else minimum with a "
-                 "vertical bar, else free), control, minimum or free")
-      ->transform(CLI::IsMember({"auto", "control", "minimum", "free"}));
-  app.add_option("--upright",
-                 input_options.datum.upright,
-                 "Free network: 1 = z along the photographs' up direction, "
-                 "origin at the object's centre (0 = the relative "
-                 "orientation's coordinates)");
-  app.add_option("--datum_point",
-                 input_options.datum.datum_point,
-                 "Minimum datum: the point that fixes the rotation about the "
-                 "vertical (default: the control point farthest from the "
-                 "bar)");
-  app.add_option("--self_calibration",
-                 self_calibration,
-                 "none, all, significant (t-test, stepwise), or a list of "
-                 "parameters, e.g. dc,dx0,dy0,K1");
-  app.add_option("--camera_model",
-                 camera_model,
-                 "brown_beyer (the ten additional parameters) or colmap "
-                 "(the model's own COLMAP cameras)")
-      ->transform(CLI::IsMember({"brown_beyer", "colmap"}));
-  app.add_option("--image_sigma_px",
-                 input_options.image_sigma_px,
-                 "A priori standard deviation of an image coordinate, px");
-  app.add_option("--tie_points",
-                 tie_points,
-                 "Tie observations: model (the model's tracks), alsm (bayon "
-                 "tiepoints' least-squares tie points), both; auto: both "
-                 "where the database has tie points, else model")
-      ->transform(CLI::IsMember({"auto", "alsm", "model", "both"}));
-  app.add_option("--min_tie_sigma_px",
-                 input_options.min_tie_sigma_px,
-                 "Tie points: floor of the least-squares standard deviations, "
-                 "px");
-  app.add_option("--variance_components",
-                 options.variance_components,
-                 "1: estimate the precision of each observation group "
-                 "(keypoint tracks, tie points, manual measurements) by "
-                 "variance component estimation before data snooping");
-  app.add_option("--blunder_detection",
-                 blunders,
-                 "robust (Huber, then data snooping), snooping, or none")
-      ->transform(CLI::IsMember({"robust", "snooping", "none"}));
-  app.add_option("--critical_value",
-                 options.snooping_critical_value,
-                 "Data snooping: critical normalised residual (Baarda)");
-  app.add_option("--significance_t",
-                 options.significance_t,
-                 "Self-calibration: t-value below which a parameter is "
-                 "removed");
-  app.add_option("--max_correlation",
-                 options.max_correlation,
-                 "Correlations above this are flagged");
-  app.add_option("--max_exterior_correlation",
-                 options.max_exterior_correlation,
-                 "Self-calibration (significant): a parameter correlated "
-                 "above this with an exterior orientation is not "
-                 "determinable and removed (the interior orientation only "
-                 "when also imprecise, --max_interior_sigma)");
-  app.add_option("--max_interior_sigma",
-                 options.max_interior_sigma,
-                 "Self-calibration (significant): the interior orientation "
-                 "is removed for such a correlation only with a standard "
-                 "deviation above this share of the image diagonal");
-  app.add_option("--two_steps",
-                 options.two_steps,
-                 "1: adjust without self-calibration first (the paper's "
-                 "first step)");
-  app.add_option("--max_num_iterations",
-                 options.solver.max_num_iterations,
-                 "Iterations per solution");
-  app.add_option("--num_threads", options.solver.num_threads, "-1: all cores");
+  command.AddOptions(&input_options);
+  command.AddOptions(&options);
   app.add_option("--log_path",
                  log_path,
                  "Log file (default <output_path>/../../logs/adjust.log)");
   if (!command.Parse(argc, argv)) return 0;
 
-  input_options.datum.datum = datum == "control"   ? DatumType::kControl
-                              : datum == "minimum" ? DatumType::kMinimum
-                              : datum == "free"    ? DatumType::kFree
-                                                   : DatumType::kAuto;
-  input_options.tie_points = TiePointSourceFromName(tie_points);
-  input_options.camera_model = camera_model == "colmap"
-                                   ? CameraModelChoice::kColmap
-                                   : CameraModelChoice::kBrownBeyer;
-  if (self_calibration == "none") {
-    options.self_calibration = SelfCalibration::kNone;
-  } else if (self_calibration == "all") {
-    options.self_calibration = SelfCalibration::kAll;
-  } else if (self_calibration == "significant") {
-    options.self_calibration = SelfCalibration::kSignificant;
-  } else {
-    options.self_calibration = SelfCalibration::kList;
-    options.parameter_list = SplitList(self_calibration);
-  }
-  options.blunder_detection = blunders == "none" ? BlunderDetection::kNone
-                              : blunders == "snooping"
-                                  ? BlunderDetection::kSnooping
-                                  : BlunderDetection::kRobust;
   options.Check();
   input_options.Check();
   CheckOutputPath(output_path, overwrite);
@@ -174,8 +76,8 @@ int RunAdjust(int argc, char** argv) {
   info.input_path = input_path;
   info.control_path = control_path;
   if (frame) info.georeference_json = GeoFrameJson(*frame);
-  info.self_calibration = self_calibration;
-  info.blunder_detection = blunders;
+  info.self_calibration = options.SelfCalibrationName();
+  info.blunder_detection = BlunderDetectionName(options.blunder_detection);
   const AdjustmentOutputs outputs =
       MakeAdjustmentOutputs(input, result, options, info);
   WriteAdjustmentOutputs(outputs, output_path, overwrite);

@@ -15,8 +15,6 @@ namespace bayon {
 
 int RunStripCommand(int argc, char** argv) {
   std::string database_path, output_path, control_path, log_path;
-  std::string ring = "auto", datum = "auto", order = "auto";
-  std::string tie_points = "auto";
   bool overwrite = false;
   StripOptions options;
   CommandLine command(
@@ -42,77 +40,11 @@ int RunStripCommand(int argc, char** argv) {
                  "distances.txt); without it the model stays in model "
                  "coordinates");
   app.add_option("--overwrite", overwrite, "Replace an existing output folder");
-  app.add_option("--ring",
-                 ring,
-                 "auto (closed when the last image is related to the first), "
-                 "closed or open")
-      ->transform(CLI::IsMember({"auto", "closed", "open"}));
-  app.add_option("--datum",
-                 datum,
-                 "auto (control with 3+ control points, else the minimum "
-                 "datum with a vertical bar), control or minimum")
-      ->transform(CLI::IsMember({"auto", "control", "minimum"}));
-  app.add_option("--datum_point",
-                 options.datum.datum_point,
-                 "Minimum datum: the point that fixes the rotation about the "
-                 "vertical");
-  app.add_option("--max_gap",
-                 options.max_gap,
-                 "Bridge a missing model with an image up to this many places "
-                 "back");
-  app.add_option("--max_loop_error_deg",
-                 options.view_graph.max_loop_error_deg,
-                 "A pair most of whose triangles of relative rotations fail "
-                 "to close within this is left out, deg");
-  app.add_option("--max_loop_error_sigmas",
-                 options.view_graph.max_loop_error_sigmas,
-                 "... and within this many of the triangle's standard "
-                 "deviations");
-  app.add_option("--min_common_points",
-                 options.min_common_points,
-                 "Tie points two models must share for the scale transfer");
-  app.add_option("--image_sigma_px",
-                 options.image_sigma_px,
-                 "Precision of a keypoint, px");
-  app.add_option("--tie_points",
-                 tie_points,
-                 "Tie observations: model (the tracks of the verified "
-                 "matches), alsm (bayon tiepoints' least-squares tie points), "
-                 "both; auto: both where the database has tie points")
-      ->transform(CLI::IsMember({"auto", "alsm", "model", "both"}));
-  app.add_option("--min_tie_sigma_px",
-                 options.min_tie_sigma_px,
-                 "Tie points: floor of the least-squares standard deviations, "
-                 "px");
-  app.add_option("--resection",
-                 options.resection,
-                 "1: place images no model attaches by spatial resection");
-  app.add_option("--min_resection_points",
-                 options.min_resection_points,
-                 "Resection: intersected tie points needed (inliers)");
-  app.add_option("--resection_max_error_px",
-                 options.resection_max_error_px,
-                 "Resection: largest image error of an inlier, px");
-  app.add_option("--max_reprojection_error_px",
-                 options.max_reprojection_error_px,
-                 "Strip adjustment: observations above this are removed");
-  app.add_option(
-      "--adjust", options.adjust, "1: adjust the strip in model coordinates");
-  app.add_option("--num_threads", options.num_threads, "-1: all cores");
+  command.AddOptions(&options);
   app.add_option(
       "--log_path", log_path, "Log file (default <workspace>/logs/strip.log)");
   if (!command.Parse(argc, argv)) return 0;
 
-  options.tie_points = TiePointSourceFromName(tie_points);
-  options.ring = ring == "closed" ? RingClosure::kClosed
-                 : ring == "open" ? RingClosure::kOpen
-                                  : RingClosure::kAuto;
-  options.order = order == "name"    ? StripOrder::kName
-                  : order == "graph" ? StripOrder::kGraph
-                                     : StripOrder::kAuto;
-  options.datum.datum = datum == "control"   ? DatumType::kControl
-                        : datum == "minimum" ? DatumType::kMinimum
-                                             : DatumType::kAuto;
   options.Check();
   CheckOutputPath(output_path, overwrite);
   if (log_path.empty()) {

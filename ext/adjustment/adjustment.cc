@@ -58,7 +58,7 @@ std::vector<std::vector<int>> ResolveCandidates(
         for (int idx : CandidateParameters(model)) {
           known += (known.empty() ? "" : ", ") + names[idx];
         }
-        ThrowInputError("--self_calibration: '",
+        ThrowInputError("self_calibration: '",
                         wanted,
                         "' is not a parameter of the ",
                         CameraModelInfoFor(model).name,
@@ -69,7 +69,7 @@ std::vector<std::vector<int>> ResolveCandidates(
       const int idx = static_cast<int>(it - names.begin());
       if (model == CameraModelId::kBrownBeyer &&
           idx < brown::kFirstAdditional) {
-        ThrowInputError("--self_calibration: ",
+        ThrowInputError("self_calibration: ",
                         wanted,
                         " is a nominal value; estimate its correction d",
                         wanted,
@@ -693,39 +693,121 @@ class Adjuster {
 
 }  // namespace
 
+std::string BlunderDetectionName(BlunderDetection method) {
+  switch (method) {
+    case BlunderDetection::kNone:
+      return "none";
+    case BlunderDetection::kSnooping:
+      return "snooping";
+    case BlunderDetection::kRobust:
+      break;
+  }
+  return "robust";
+}
+
+std::string AdjustmentOptions::SelfCalibrationName() const {
+  switch (self_calibration) {
+    case SelfCalibration::kNone:
+      return "none";
+    case SelfCalibration::kAll:
+      return "all";
+    case SelfCalibration::kSignificant:
+      return "significant";
+    case SelfCalibration::kList:
+      break;
+  }
+  std::string list;
+  for (const std::string& name : parameter_list) {
+    list += (list.empty() ? "" : ",") + name;
+  }
+  return list;
+}
+
+void AdjustmentOptions::SetSelfCalibration(const std::string& name) {
+  parameter_list.clear();
+  if (name == "none") {
+    self_calibration = SelfCalibration::kNone;
+  } else if (name == "all") {
+    self_calibration = SelfCalibration::kAll;
+  } else if (name == "significant") {
+    self_calibration = SelfCalibration::kSignificant;
+  } else {
+    self_calibration = SelfCalibration::kList;
+    parameter_list = SplitList(name);
+  }
+}
+
+void AdjustmentOptions::Register(OptionRegistry* r) {
+  r->AddParsed(
+      "self_calibration",
+      [this] { return SelfCalibrationName(); },
+      [this](const std::string& name) { SetSelfCalibration(name); },
+      "none, all, significant (t-test, stepwise), or a list of parameters, "
+      "e.g. dc,dx0,dy0,K1");
+  r->Add("variance_components",
+         &variance_components,
+         "1: estimate the precision of each observation group (keypoint "
+         "tracks, tie points, manual measurements) by variance component "
+         "estimation before data snooping");
+  r->AddChoice("blunder_detection",
+               &blunder_detection,
+               ChoicesOf<BlunderDetection>(BlunderDetectionName,
+                                           {BlunderDetection::kRobust,
+                                            BlunderDetection::kSnooping,
+                                            BlunderDetection::kNone}),
+               "robust (Huber, then data snooping), snooping, or none");
+  r->Add("critical_value",
+         &snooping_critical_value,
+         "Data snooping: critical normalised residual (Baarda)");
+  r->Add("significance_t",
+         &significance_t,
+         "Self-calibration: t-value below which a parameter is removed");
+  r->Add("max_correlation",
+         &max_correlation,
+         "Correlations above this are flagged");
+  r->Add("max_exterior_correlation",
+         &max_exterior_correlation,
+         "Self-calibration (significant): a parameter correlated above this "
+         "with an exterior orientation is not determinable and removed (the "
+         "interior orientation only when also imprecise, max_interior_sigma)");
+  r->Add("max_interior_sigma",
+         &max_interior_sigma,
+         "Self-calibration (significant): the interior orientation is removed "
+         "for such a correlation only with a standard deviation above this "
+         "share of the image diagonal");
+  r->Add("two_steps",
+         &two_steps,
+         "1: adjust without self-calibration first (the paper's first step)");
+  r->Add("max_num_iterations",
+         &solver.max_num_iterations,
+         "Iterations per solution");
+  r->Add("num_threads", &solver.num_threads, "-1: all cores");
+}
+
 void AdjustmentOptions::Check() const {
-  CheckOption(significance_t > 0,
-              "AdjustmentOptions.significance_t",
-              "> 0",
-              significance_t);
+  CheckOption(significance_t > 0, "significance_t", "> 0", significance_t);
   CheckOption(max_correlation > 0 && max_correlation <= 1,
-              "AdjustmentOptions.max_correlation",
+              "max_correlation",
               "in (0, 1]",
               max_correlation);
   CheckOption(max_exterior_correlation > 0 && max_exterior_correlation <= 1,
-              "AdjustmentOptions.max_exterior_correlation",
+              "max_exterior_correlation",
               "in (0, 1]",
               max_exterior_correlation);
-  CheckOption(max_interior_sigma > 0,
-              "AdjustmentOptions.max_interior_sigma",
-              "> 0",
-              max_interior_sigma);
+  CheckOption(
+      max_interior_sigma > 0, "max_interior_sigma", "> 0", max_interior_sigma);
   CheckOption(snooping_critical_value > 0,
-              "AdjustmentOptions.snooping_critical_value",
+              "critical_value",
               "> 0",
               snooping_critical_value);
   CheckOption(max_snooping_iterations >= 1,
-              "AdjustmentOptions.max_snooping_iterations",
+              "max_snooping_iterations",
               ">= 1",
               max_snooping_iterations);
-  CheckOption(robust_loss_scale > 0,
-              "AdjustmentOptions.robust_loss_scale",
-              "> 0",
-              robust_loss_scale);
+  CheckOption(
+      robust_loss_scale > 0, "robust_loss_scale", "> 0", robust_loss_scale);
   if (self_calibration == SelfCalibration::kList && parameter_list.empty()) {
-    ThrowInputError(
-        "AdjustmentOptions.parameter_list must name at least one parameter "
-        "for self-calibration 'list'");
+    ThrowInputError("self_calibration: the list names no parameter");
   }
   solver.Check();
 }

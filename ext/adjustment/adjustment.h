@@ -38,6 +38,7 @@
 #include "ext/adjustment/adjustment_block.h"
 #include "ext/adjustment/bundle_solver.h"
 #include "ext/adjustment/precision.h"
+#include "ext/core/option_registry.h"
 
 #include <string>
 #include <vector>
@@ -46,6 +47,8 @@ namespace bayon {
 
 enum class SelfCalibration { kNone, kAll, kSignificant, kList };
 enum class BlunderDetection { kNone, kSnooping, kRobust };
+// "none", "snooping", "robust".
+std::string BlunderDetectionName(BlunderDetection method);
 
 struct AdjustmentOptions {
   // Which camera parameters the second step estimates: none, all candidate
@@ -89,6 +92,13 @@ struct AdjustmentOptions {
   int max_component_iterations = 4;
   double min_component_redundancy = 30;
   BundleSolverOptions solver;
+  // "none", "all", "significant", or the parameter list ("dc,dx0,dy0").
+  std::string SelfCalibrationName() const;
+  // Reads what SelfCalibrationName() writes.
+  void SetSelfCalibration(const std::string& name);
+  // The fields `bayon adjust` takes (the solver's iterations and threads
+  // among them), under its flags' names.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -212,21 +212,26 @@ std::vector<TiePointRecord> ReadTiePointsFor(Database* database,
   if (points.empty() &&
       (source == TiePointSource::kAlsm || source == TiePointSource::kBoth)) {
     ThrowInputError(database->path(),
-                    ": --tie_points ",
+                    ": tie_points ",
                     source == TiePointSource::kAlsm ? "alsm" : "both",
                     ", but the database has no tie points (bayon_tie_points; "
-                    "run bayon tiepoints first, or --tie_points model)");
+                    "run bayon tiepoints first, or tie_points model)");
   }
   return points;
 }
 
-TiePointSource TiePointSourceFromName(const std::string& name) {
-  if (name == "auto") return TiePointSource::kAuto;
-  if (name == "model") return TiePointSource::kModel;
-  if (name == "alsm") return TiePointSource::kAlsm;
-  if (name == "both") return TiePointSource::kBoth;
-  ThrowInputError(
-      "--tie_points: '", name, "' is not auto, model, alsm or both");
+std::string TiePointSourceName(TiePointSource source) {
+  switch (source) {
+    case TiePointSource::kAuto:
+      return "auto";
+    case TiePointSource::kModel:
+      return "model";
+    case TiePointSource::kAlsm:
+      return "alsm";
+    case TiePointSource::kBoth:
+      break;
+  }
+  return "both";
 }
 
 Eigen::Matrix2d FlooredCovariance(const Eigen::Matrix2d& covariance,
@@ -238,15 +243,40 @@ Eigen::Matrix2d FlooredCovariance(const Eigen::Matrix2d& covariance,
          eigen.eigenvectors().transpose();
 }
 
+void AdjustmentInputOptions::Register(OptionRegistry* r) {
+  datum.Register(r);
+  r->Add("upright",
+         &datum.upright,
+         "Free network: 1 = z along the photographs' up direction, origin at "
+         "the object's centre (0 = the relative orientation's coordinates)");
+  r->AddChoice("camera_model",
+               &camera_model,
+               {{"brown_beyer", CameraModelChoice::kBrownBeyer},
+                {"colmap", CameraModelChoice::kColmap}},
+               "brown_beyer (the ten additional parameters) or colmap (the "
+               "model's own COLMAP cameras)");
+  r->Add("image_sigma_px",
+         &image_sigma_px,
+         "A priori standard deviation of an image coordinate, px");
+  r->AddChoice("tie_points",
+               &tie_points,
+               ChoicesOf<TiePointSource>(TiePointSourceName,
+                                         {TiePointSource::kAuto,
+                                          TiePointSource::kAlsm,
+                                          TiePointSource::kModel,
+                                          TiePointSource::kBoth}),
+               "Tie observations: model (the model's tracks), alsm (bayon "
+               "tiepoints' least-squares tie points), both; auto: both where "
+               "the database has tie points, else model");
+  r->Add("min_tie_sigma_px",
+         &min_tie_sigma_px,
+         "Tie points: floor of the least-squares standard deviations, px");
+}
+
 void AdjustmentInputOptions::Check() const {
-  CheckOption(image_sigma_px > 0,
-              "AdjustmentInputOptions.image_sigma_px",
-              "> 0",
-              image_sigma_px);
-  CheckOption(min_tie_sigma_px > 0,
-              "AdjustmentInputOptions.min_tie_sigma_px",
-              "> 0",
-              min_tie_sigma_px);
+  CheckOption(image_sigma_px > 0, "image_sigma_px", "> 0", image_sigma_px);
+  CheckOption(
+      min_tie_sigma_px > 0, "min_tie_sigma_px", "> 0", min_tie_sigma_px);
   datum.Check();
 }
 

@@ -38,8 +38,8 @@ enum class CameraModelChoice { kBrownBeyer, kColmap };
 // tracks hold the block together where the tie points are sparse). kAuto is
 // kBoth where the database has tie points, else kModel.
 enum class TiePointSource { kAuto, kModel, kAlsm, kBoth };
-// "auto", "model", "alsm" or "both" (the commands' --tie_points).
-TiePointSource TiePointSourceFromName(const std::string& name);
+// "auto", "model", "alsm" or "both".
+std::string TiePointSourceName(TiePointSource source);
 
 struct AdjustmentInputOptions {
   CameraModelChoice camera_model = CameraModelChoice::kBrownBeyer;
@@ -53,6 +53,8 @@ struct AdjustmentInputOptions {
   // raised to this standard deviation, pixels.
   double min_tie_sigma_px = 0.02;
   DatumOptions datum;
+  // Every field, the datum's among them, under `bayon adjust`'s flags.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

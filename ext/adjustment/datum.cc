@@ -161,7 +161,7 @@ class DatumBuilder {
     switch (options_.datum) {
       case DatumType::kControl:
         if (num_control == 0) {
-          ThrowInputError("--datum control: no control points (",
+          ThrowInputError("datum control: no control points (",
                           control_.folder.empty() ? std::string("no control "
                                                                 "folder given")
                                                   : PointsFile(),
@@ -172,7 +172,7 @@ class DatumBuilder {
       case DatumType::kMinimum:
         if (VerticalDistance() == nullptr) {
           ThrowInputError(
-              "--datum minimum needs a distance on a vertical "
+              "datum minimum needs a distance on a vertical "
               "levelling bar (a line '... vertical' in ",
               control_.folder.empty() ? std::string("control")
                                       : control_.folder,
@@ -352,7 +352,7 @@ class DatumBuilder {
     if (!options_.datum_point.empty()) {
       const auto it = given_.find(options_.datum_point);
       if (it == given_.end()) {
-        ThrowInputError("--datum_point: '",
+        ThrowInputError("datum_point: '",
                         options_.datum_point,
                         "' is not in ",
                         PointsFile());
@@ -372,7 +372,7 @@ class DatumBuilder {
     }
     if (best == nullptr) {
       ThrowInputError(
-          "--datum minimum: besides the levelling bar, one more "
+          "datum minimum: besides the levelling bar, one more "
           "control point measured in two or more images is "
           "needed for the rotation about the vertical (",
           PointsFile(),
@@ -385,7 +385,7 @@ class DatumBuilder {
                                     const char* role) const {
     const auto it = measured_.find(name);
     if (it == measured_.end() || !it->second.model_xyz) {
-      ThrowInputError("--datum minimum: the ",
+      ThrowInputError("datum minimum: the ",
                       role,
                       " '",
                       name,
@@ -407,7 +407,7 @@ class DatumBuilder {
     const ControlPoint& c = *DatumPoint(a_object, bar);
     const Eigen::Vector2d c_offset = (c.xyz - a_object).head<2>();
     if (c_offset.norm() < 1e-6 * std::max(1.0, bar.distance_m)) {
-      ThrowInputError("--datum minimum: the datum point '",
+      ThrowInputError("datum minimum: the datum point '",
                       c.name,
                       "' lies on the levelling bar's vertical; it cannot fix "
                       "the rotation about it");
@@ -418,7 +418,7 @@ class DatumBuilder {
     const Eigen::Vector3d bar_model = b_model - a_model;
     if (bar_model.norm() <= 0) {
       ThrowInputError(
-          "--datum minimum: the ends of the levelling bar "
+          "datum minimum: the ends of the levelling bar "
           "coincide in the model");
     }
     // Scale from the bar, the bar onto +Z, then the turn about Z that puts C
@@ -428,7 +428,7 @@ class DatumBuilder {
         bar_model.normalized(), Eigen::Vector3d::UnitZ());
     const Eigen::Vector3d c_levelled = level * (c_model - a_model);
     if (c_levelled.head<2>().norm() < 1e-9) {
-      ThrowInputError("--datum minimum: the datum point '",
+      ThrowInputError("datum minimum: the datum point '",
                       c.name,
                       "' lies on the levelling bar's line in the model");
     }
@@ -618,13 +618,30 @@ std::set<size_t> TakeControlFromNamedTiePoints(
   return taken;
 }
 
+void DatumOptions::Register(OptionRegistry* r) {
+  r->AddChoice(
+      "datum",
+      &datum,
+      ChoicesOf<DatumType>([](DatumType t) { return DatumTypeName(t); },
+                           {DatumType::kAuto,
+                            DatumType::kControl,
+                            DatumType::kMinimum,
+                            DatumType::kFree}),
+      "auto (control with 3+ control points, else minimum with a "
+      "vertical bar, else free), control, minimum or free");
+  r->Add("datum_point",
+         &datum_point,
+         "Minimum datum: the point that fixes the rotation about the vertical "
+         "(default: the control point farthest from the bar)");
+}
+
 void DatumOptions::Check() const {
   CheckOption(measurement_sigma_px > 0,
-              "DatumOptions.measurement_sigma_px",
+              "measurement_sigma_px",
               "> 0",
               measurement_sigma_px);
   CheckOption(max_similarity_residual_m >= 0,
-              "DatumOptions.max_similarity_residual_m",
+              "max_similarity_residual_m",
               ">= 0",
               max_similarity_residual_m);
 }

@@ -43,6 +43,7 @@
 #include "ext/adjustment/adjustment_block.h"
 #include "ext/colmap/control_io.h"
 #include "ext/colmap/table_tie_points.h"
+#include "ext/core/option_registry.h"
 #include "ext/core/sim3.h"
 
 #include <map>
@@ -93,6 +94,8 @@ struct DatumOptions {
   // Free network: z up along the photographs' up direction, the origin at
   // the object's centre (0: the relative orientation's coordinates).
   bool upright = true;
+  // datum and datum_point (upright is the adjustment's own).
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -1097,33 +1097,82 @@ class StripBuilder {
 
 }  // namespace
 
+void StripOptions::Register(OptionRegistry* r) {
+  r->AddChoice("ring",
+               &ring,
+               {{"auto", RingClosure::kAuto},
+                {"closed", RingClosure::kClosed},
+                {"open", RingClosure::kOpen}},
+               "auto (closed when the last image is related to the first), "
+               "closed or open");
+  r->AddChoice("order",
+               &order,
+               {{"auto", StripOrder::kAuto},
+                {"name", StripOrder::kName},
+                {"graph", StripOrder::kGraph}},
+               "Models connected in the images' name order, or by the view "
+               "graph (the image sharing the most tie points next); auto: "
+               "names when every image is related to its predecessor");
+  datum.Register(r);
+  r->Add("max_gap",
+         &max_gap,
+         "Bridge a missing model with an image up to this many places back");
+  view_graph.Register(r);
+  r->Add("min_common_points",
+         &min_common_points,
+         "Tie points two models must share for the scale transfer");
+  r->Add("image_sigma_px", &image_sigma_px, "Precision of a keypoint, px");
+  r->AddChoice("tie_points",
+               &tie_points,
+               ChoicesOf<TiePointSource>(TiePointSourceName,
+                                         {TiePointSource::kAuto,
+                                          TiePointSource::kAlsm,
+                                          TiePointSource::kModel,
+                                          TiePointSource::kBoth}),
+               "Tie observations: model (the tracks of the verified matches), "
+               "alsm (bayon tiepoints' least-squares tie points), both; auto: "
+               "both where the database has tie points");
+  r->Add("min_tie_sigma_px",
+         &min_tie_sigma_px,
+         "Tie points: floor of the least-squares standard deviations, px");
+  r->Add("resection",
+         &resection,
+         "1: place images no model attaches by spatial resection");
+  r->Add("min_resection_points",
+         &min_resection_points,
+         "Resection: intersected tie points needed (inliers)");
+  r->Add("resection_max_error_px",
+         &resection_max_error_px,
+         "Resection: largest image error of an inlier, px");
+  r->Add("max_reprojection_error_px",
+         &max_reprojection_error_px,
+         "Strip adjustment: observations above this are removed");
+  r->Add("adjust", &adjust, "1: adjust the strip in model coordinates");
+  r->Add("num_threads", &num_threads, "-1: all cores");
+}
+
 void StripOptions::Check() const {
   view_graph.Check();
-  CheckOption(max_gap >= 1, "StripOptions.max_gap", ">= 1", max_gap);
-  CheckOption(min_common_points >= 1,
-              "StripOptions.min_common_points",
-              ">= 1",
-              min_common_points);
+  CheckOption(max_gap >= 1, "max_gap", ">= 1", max_gap);
+  CheckOption(
+      min_common_points >= 1, "min_common_points", ">= 1", min_common_points);
   CheckOption(min_intersection_angle_deg >= 0,
-              "StripOptions.min_intersection_angle_deg",
+              "min_intersection_angle_deg",
               ">= 0",
               min_intersection_angle_deg);
   CheckOption(max_reprojection_error_px > 0,
-              "StripOptions.max_reprojection_error_px",
+              "max_reprojection_error_px",
               "> 0",
               max_reprojection_error_px);
+  CheckOption(image_sigma_px > 0, "image_sigma_px", "> 0", image_sigma_px);
   CheckOption(
-      image_sigma_px > 0, "StripOptions.image_sigma_px", "> 0", image_sigma_px);
-  CheckOption(min_tie_sigma_px > 0,
-              "StripOptions.min_tie_sigma_px",
-              "> 0",
-              min_tie_sigma_px);
+      min_tie_sigma_px > 0, "min_tie_sigma_px", "> 0", min_tie_sigma_px);
   CheckOption(min_resection_points >= 6,
-              "StripOptions.min_resection_points",
+              "min_resection_points",
               ">= 6",
               min_resection_points);
   CheckOption(resection_max_error_px > 0,
-              "StripOptions.resection_max_error_px",
+              "resection_max_error_px",
               "> 0",
               resection_max_error_px);
   datum.Check();

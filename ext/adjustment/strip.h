@@ -94,6 +94,9 @@ struct StripOptions {
   // (view_graph.h) are left out before anything is chained.
   ViewGraphOptions view_graph;
   int num_threads = -1;
+  // Every field but min_intersection_angle_deg and the datum's upright,
+  // under `bayon strip`'s flags.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -12,13 +12,21 @@
 
 namespace bayon {
 
+void ViewGraphOptions::Register(OptionRegistry* r) {
+  r->Add("max_loop_error_deg",
+         &max_loop_error_deg,
+         "A pair most of whose triangles of relative rotations fail to close "
+         "within this is left out, deg");
+  r->Add("max_loop_error_sigmas",
+         &max_loop_error_sigmas,
+         "... and within this many of the triangle's standard deviations");
+}
+
 void ViewGraphOptions::Check() const {
-  CheckOption(max_loop_error_deg > 0,
-              "ViewGraphOptions.max_loop_error_deg",
-              "> 0",
-              max_loop_error_deg);
+  CheckOption(
+      max_loop_error_deg > 0, "max_loop_error_deg", "> 0", max_loop_error_deg);
   CheckOption(max_loop_error_sigmas > 0,
-              "ViewGraphOptions.max_loop_error_sigmas",
+              "max_loop_error_sigmas",
               "> 0",
               max_loop_error_sigmas);
 }

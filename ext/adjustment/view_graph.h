@@ -27,6 +27,8 @@
 // and are kept.
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <Eigen/Core>
 
 #include <string>
@@ -47,6 +49,7 @@ struct ViewGraphOptions {
   // standard deviations (above).
   double max_loop_error_deg = 5.0;
   double max_loop_error_sigmas = 3.0;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -114,6 +114,14 @@ class OptionRegistry {
     };
     AddText(name, choices, help);
   }
+  // A value an options struct writes and reads itself; `set` throws
+  // InputError (without the option's name) for text it cannot read.
+  void AddParsed(const std::string& name,
+                 std::function<std::string()> get,
+                 std::function<void(const std::string&)> set,
+                 const std::string& help) {
+    AddText(name, Text{{}, std::move(get), std::move(set)}, help);
+  }
   // Switches, each turned on by naming it in a comma-separated list.
   void AddSwitches(const std::string& name,
                    const std::vector<std::pair<std::string, bool*>>& switches,
