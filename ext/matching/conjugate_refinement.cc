@@ -13,30 +13,50 @@
 
 namespace bayon {
 
+void ConjugateRefinementOptions::Register(OptionRegistry* r) {
+  lsm.RegisterMatchChecks(r);
+  r->Add("keep_unrefined",
+         &keep_unrefined,
+         "1: matches LSM rejects stay at their correlation peaks");
+  r->Add("refined_sigma_px",
+         &refined_sigma_px,
+         "Standard deviation given to a refined point, px");
+  r->Add("num_neighbors",
+         &num_neighbors,
+         "Neighbouring matches for the local affinity");
+  r->Add("neighbor_fraction",
+         &neighbor_fraction,
+         "... within this share of the larger image side");
+  r->Add("propagation_rounds",
+         &propagation_rounds,
+         "Rounds of least-squares propagation (0: none)");
+  r->Add("propagation_max_shift_px",
+         &propagation_max_shift_px,
+         "Propagation: largest move from the predicted position, px");
+  r->Add("max_keypoint_distance_px",
+         &max_keypoint_distance_px,
+         "A propagated point must lie this near an image-2 keypoint");
+}
+
 void ConjugateRefinementOptions::Check() const {
   lsm.Check();
-  CheckOption(num_neighbors >= 6,
-              "ConjugateRefinementOptions.num_neighbors",
-              ">= 6",
-              num_neighbors);
+  CheckOption(num_neighbors >= 6, "num_neighbors", ">= 6", num_neighbors);
   CheckOption(neighbor_fraction > 0 && neighbor_fraction <= 1,
-              "ConjugateRefinementOptions.neighbor_fraction",
+              "neighbor_fraction",
               "in (0, 1]",
               neighbor_fraction);
-  CheckOption(refined_sigma_px > 0,
-              "ConjugateRefinementOptions.refined_sigma_px",
-              "> 0",
-              refined_sigma_px);
+  CheckOption(
+      refined_sigma_px > 0, "refined_sigma_px", "> 0", refined_sigma_px);
   CheckOption(propagation_rounds >= 0,
-              "ConjugateRefinementOptions.propagation_rounds",
+              "propagation_rounds",
               ">= 0",
               propagation_rounds);
   CheckOption(propagation_max_shift_px > 0,
-              "ConjugateRefinementOptions.propagation_max_shift_px",
+              "propagation_max_shift_px",
               "> 0",
               propagation_max_shift_px);
   CheckOption(max_keypoint_distance_px > 0,
-              "ConjugateRefinementOptions.max_keypoint_distance_px",
+              "max_keypoint_distance_px",
               "> 0",
               max_keypoint_distance_px);
 }

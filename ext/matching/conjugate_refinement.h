@@ -34,6 +34,7 @@
 // relaxation.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/matching/correlation_matcher.h"
 #include "ext/matching/keypoint_refinement.h"
 
@@ -81,6 +82,7 @@ struct ConjugateRefinementOptions {
   int propagation_rounds = 2;
   double propagation_max_shift_px = 3.0;
   double max_keypoint_distance_px = 2.0;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

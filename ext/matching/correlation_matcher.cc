@@ -14,56 +14,63 @@
 
 namespace bayon {
 
+void CorrelationMatchingOptions::Register(OptionRegistry* r) {
+  r->Add("min_ncc", &min_ncc, "Correlation threshold r");
+  r->Add("search_window_fraction",
+         &search_window_fraction,
+         "Search window area as a fraction of the image");
+  r->Add("max_keypoint_shift_px",
+         &max_keypoint_shift_px,
+         "Image-2 windows also shifted this far from the keypoint");
+  r->Add("max_candidates_per_point",
+         &max_candidates_per_point,
+         "Candidates kept per point");
+  r->Add("detect_rotation",
+         &detect_rotation,
+         "1: find in-plane rotations by quarter turns");
+  r->Add("num_passes",
+         &num_passes,
+         "Matching passes (later ones centred on earlier matches)");
+  r->AddNested("relaxation", &relaxation);
+}
+
 void CorrelationMatchingOptions::Check() const {
-  CheckOption(min_ncc > -1 && min_ncc < 1,
-              "CorrelationMatchingOptions.min_ncc",
-              "in (-1, 1)",
-              min_ncc);
+  CheckOption(min_ncc > -1 && min_ncc < 1, "min_ncc", "in (-1, 1)", min_ncc);
   CheckOption(search_window_fraction > 0 && search_window_fraction <= 4,
-              "CorrelationMatchingOptions.search_window_fraction",
+              "search_window_fraction",
               "in (0, 4]",
               search_window_fraction);
   CheckOption(max_candidates_per_point >= 1,
-              "CorrelationMatchingOptions.max_candidates_per_point",
+              "max_candidates_per_point",
               ">= 1",
               max_candidates_per_point);
   CheckOption(max_keypoint_shift_px >= 0 && max_keypoint_shift_px <= 3,
-              "CorrelationMatchingOptions.max_keypoint_shift_px",
+              "max_keypoint_shift_px",
               "in [0, 3]",
               max_keypoint_shift_px);
   CheckOption(shift_min_ncc > -1 && shift_min_ncc < 1,
-              "CorrelationMatchingOptions.shift_min_ncc",
+              "shift_min_ncc",
               "in (-1, 1)",
               shift_min_ncc);
   CheckOption(refine_min_ncc > -1 && refine_min_ncc < 1,
-              "CorrelationMatchingOptions.refine_min_ncc",
+              "refine_min_ncc",
               "in (-1, 1)",
               refine_min_ncc);
-  CheckOption(global_num_points >= 4,
-              "CorrelationMatchingOptions.global_num_points",
-              ">= 4",
-              global_num_points);
+  CheckOption(
+      global_num_points >= 4, "global_num_points", ">= 4", global_num_points);
   CheckOption(global_inlier_fraction > 0 && global_inlier_fraction < 1,
-              "CorrelationMatchingOptions.global_inlier_fraction",
+              "global_inlier_fraction",
               "in (0, 1)",
               global_inlier_fraction);
   CheckOption(global_min_inliers >= 2,
-              "CorrelationMatchingOptions.global_min_inliers",
+              "global_min_inliers",
               ">= 2",
               global_min_inliers);
-  CheckOption(global_num_trials >= 1,
-              "CorrelationMatchingOptions.global_num_trials",
-              ">= 1",
-              global_num_trials);
-  CheckOption(num_passes >= 1,
-              "CorrelationMatchingOptions.num_passes",
-              ">= 1",
-              num_passes);
-  CheckOption(peak_sigma_px > 0,
-              "CorrelationMatchingOptions.peak_sigma_px",
-              "> 0",
-              peak_sigma_px);
-  relaxation.Check();
+  CheckOption(
+      global_num_trials >= 1, "global_num_trials", ">= 1", global_num_trials);
+  CheckOption(num_passes >= 1, "num_passes", ">= 1", num_passes);
+  CheckOption(peak_sigma_px > 0, "peak_sigma_px", "> 0", peak_sigma_px);
+  CheckNested("relaxation", relaxation);
 }
 
 namespace {

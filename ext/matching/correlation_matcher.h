@@ -43,6 +43,7 @@
 #pragma once
 
 #include "ext/colmap/database.h"
+#include "ext/core/option_registry.h"
 #include "ext/matching/correlation_patches.h"
 #include "ext/matching/relaxation.h"
 
@@ -103,6 +104,7 @@ struct CorrelationMatchingOptions {
   int num_passes = 2;
 
   RelaxationOptions relaxation;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

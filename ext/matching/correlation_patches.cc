@@ -10,26 +10,32 @@
 
 namespace bayon {
 
+void PatchOptions::Register(OptionRegistry* r) {
+  r->Add("window_size", &window_size, "Correlation window side, pixels (odd)");
+  r->Add("refine_radius",
+         &refine_radius,
+         "Sub-pixel search range around a matched keypoint, pixels");
+}
+
 void PatchOptions::Check() const {
   CheckOption(window_size >= 3 && window_size % 2 == 1,
-              "PatchOptions.window_size",
+              "window_size",
               "odd and >= 3",
               window_size);
   CheckOption(refine_radius >= 1 && refine_radius <= 8,
-              "PatchOptions.refine_radius",
+              "refine_radius",
               "in [1, 8]",
               refine_radius);
   CheckOption(refine_window_size >= 3 && refine_window_size % 2 == 1,
-              "PatchOptions.refine_window_size",
+              "refine_window_size",
               "odd and >= 3",
               refine_window_size);
-  CheckOption(
-      coarse_stride >= 1, "PatchOptions.coarse_stride", ">= 1", coarse_stride);
+  CheckOption(coarse_stride >= 1, "coarse_stride", ">= 1", coarse_stride);
   CheckOption(coarse_radius >= coarse_stride,
-              "PatchOptions.coarse_radius",
+              "coarse_radius",
               ">= coarse_stride",
               coarse_radius);
-  CheckOption(min_std >= 0, "PatchOptions.min_std", ">= 0", min_std);
+  CheckOption(min_std >= 0, "min_std", ">= 0", min_std);
 }
 
 int ImagePatches::NumValid() const {

@@ -23,6 +23,8 @@
 // pixel grid: the matcher rotates one side on the fly.
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
@@ -46,6 +48,7 @@ struct PatchOptions {
   // Windows flatter than this (standard deviation, grey values 0..255) carry
   // no signal to correlate and are marked invalid.
   double min_std = 1.0;
+  void Register(OptionRegistry* registry);
   void Check() const;
 
   int FineDim() const { return window_size * window_size; }

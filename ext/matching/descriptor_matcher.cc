@@ -12,13 +12,21 @@
 
 namespace bayon {
 
+void DescriptorMatchingOptions::Register(OptionRegistry* r) {
+  r->Add("max_ratio",
+         &max_ratio,
+         "Nearest / second-nearest distance below this (Lowe's ratio test)");
+  r->Add("max_distance",
+         &max_distance,
+         "Largest angle between descriptors, radians");
+  r->Add("cross_check", &cross_check, "1 = mutual nearest only");
+}
+
 void DescriptorMatchingOptions::Check() const {
-  CheckOption(max_ratio > 0 && max_ratio <= 1,
-              "DescriptorMatchingOptions.max_ratio",
-              "in (0, 1]",
-              max_ratio);
+  CheckOption(
+      max_ratio > 0 && max_ratio <= 1, "max_ratio", "in (0, 1]", max_ratio);
   CheckOption(max_distance > 0 && max_distance <= M_PI,
-              "DescriptorMatchingOptions.max_distance",
+              "max_distance",
               "in (0, pi] radians",
               max_distance);
 }

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "ext/colmap/database.h"
+#include "ext/core/option_registry.h"
 
 #include <Eigen/Core>
 
@@ -24,7 +25,8 @@ struct DescriptorMatchingOptions {
   double max_ratio = 0.8;     // COLMAP's SiftMatching.max_ratio
   double max_distance = 0.7;  // radians; COLMAP's SiftMatching.max_distance
   bool cross_check = true;    // mutual best only
-  void Check() const;         // throws InputError naming field, value, rule
+  void Register(OptionRegistry* registry);
+  void Check() const;  // throws InputError naming field, value, rule
 };
 
 struct DescriptorMatch {

@@ -16,23 +16,24 @@
 
 namespace bayon {
 
+void RetrievalOptions::Register(OptionRegistry* r) {
+  r->Add("max_image_size",
+         &max_image_size,
+         "Long side the photographs are reduced to, px");
+  r->Add(
+      "max_num_features", &max_num_features, "SIFT descriptors per photograph");
+  r->Add(
+      "vocabulary_size", &vocabulary_size, "Visual words learnt from the set");
+  r->Add(
+      "shortlist_size", &shortlist_size, "Candidates matched per photograph");
+}
+
 void RetrievalOptions::Check() const {
-  CheckOption(max_image_size >= 64,
-              "RetrievalOptions.max_image_size",
-              ">= 64",
-              max_image_size);
-  CheckOption(max_num_features >= 10,
-              "RetrievalOptions.max_num_features",
-              ">= 10",
-              max_num_features);
-  CheckOption(vocabulary_size >= 2,
-              "RetrievalOptions.vocabulary_size",
-              ">= 2",
-              vocabulary_size);
-  CheckOption(shortlist_size >= 1,
-              "RetrievalOptions.shortlist_size",
-              ">= 1",
-              shortlist_size);
+  CheckOption(max_image_size >= 64, "max_image_size", ">= 64", max_image_size);
+  CheckOption(
+      max_num_features >= 10, "max_num_features", ">= 10", max_num_features);
+  CheckOption(vocabulary_size >= 2, "vocabulary_size", ">= 2", vocabulary_size);
+  CheckOption(shortlist_size >= 1, "shortlist_size", ">= 1", shortlist_size);
 }
 
 namespace {

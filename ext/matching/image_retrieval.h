@@ -19,6 +19,8 @@
 // verification. Pairs off every shortlist have similarity 0.
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <Eigen/Core>
 
 #include <string>
@@ -32,7 +34,8 @@ struct RetrievalOptions {
   int vocabulary_size = 256;    // words (fewer for small sets)
   int shortlist_size = 30;      // candidates matched per photograph
   int num_threads = -1;         // photographs in parallel; -1 = all cores
-  void Check() const;           // throws InputError naming field, value, rule
+  void Register(OptionRegistry* registry);
+  void Check() const;  // throws InputError naming field, value, rule
 };
 
 // The columns j != i of row i of `similarity`, the k largest, largest

@@ -54,14 +54,8 @@ void KeypointRefinementOptions::Check() const {
       max_track_length >= 2, "max_track_length", ">= 2", max_track_length);
 }
 
-void KeypointRefinementOptions::Register(OptionRegistry* r) {
+void KeypointRefinementOptions::RegisterMatchChecks(OptionRegistry* r) {
   r->AddNested("lsm", &lsm);
-  r->Add("smoothing_sigma_px",
-         &smoothing_sigma_px,
-         "Gaussian smoothing of the images before matching, px (0: none)");
-  r->Add("use_keypoint_shape",
-         &use_keypoint_shape,
-         "1: start from the keypoints' affine frames");
   r->Add("max_sigma0", &max_sigma0, "Largest sigma0, grey values");
   r->Add("min_correlation",
          &min_correlation,
@@ -78,6 +72,16 @@ void KeypointRefinementOptions::Register(OptionRegistry* r) {
   r->Add("max_backmatch_px",
          &max_backmatch_px,
          "Largest back-matching miss, pixels");
+}
+
+void KeypointRefinementOptions::Register(OptionRegistry* r) {
+  RegisterMatchChecks(r);
+  r->Add("smoothing_sigma_px",
+         &smoothing_sigma_px,
+         "Gaussian smoothing of the images before matching, px (0: none)");
+  r->Add("use_keypoint_shape",
+         &use_keypoint_shape,
+         "1: start from the keypoints' affine frames");
   r->Add("num_reference_candidates",
          &num_reference_candidates,
          "Best-textured observations tried as the track's reference");

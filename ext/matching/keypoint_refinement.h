@@ -100,6 +100,9 @@ struct KeypointRefinementOptions {
   void Check() const;    // throws InputError naming field, value, rule
   // Its fields by name (option_registry.h), LSM's as lsm.*.
   void Register(OptionRegistry* registry);
+  // Those that judge one match (LSM's as lsm.*), for matchers that refine
+  // points found otherwise.
+  void RegisterMatchChecks(OptionRegistry* registry);
 };
 
 // One keypoint of one image.

@@ -25,21 +25,38 @@ namespace fs = std::filesystem;
 
 namespace bayon {
 
+void MatchingOptions::Register(OptionRegistry* r) {
+  r->AddNested("pairing", &pairing);
+  r->AddNested("retrieval", &retrieval);
+  r->AddNested("patches", &patches);
+  r->AddNested("correlation", &correlation);
+  r->AddNested("descriptors", &descriptors);
+  r->Add("lsm_refinement",
+         &lsm_refinement,
+         "1: conjugate points refined by least-squares matching");
+  r->AddNested("refinement", &refinement);
+  r->Add("min_num_matches",
+         &min_num_matches,
+         "Pairs with fewer matches are not written");
+  r->Add("overwrite", &overwrite, "1: replace existing matches of a pair");
+  r->Add("num_threads", &num_threads, "Threads (-1 = all cores)");
+}
+
 void MatchingOptions::Check() const {
-  pairing.Check();
-  retrieval.Check();
-  patches.Check();
-  correlation.Check();
-  descriptors.Check();
-  refinement.Check();
+  CheckNested("pairing", pairing);
+  CheckNested("retrieval", retrieval);
+  CheckNested("patches", patches);
+  CheckNested("correlation", correlation);
+  CheckNested("descriptors", descriptors);
+  CheckNested("refinement", refinement);
   const std::string shift_rule =
       StrCat("< patches.refine_radius (", patches.refine_radius, ")");
   CheckOption(correlation.max_keypoint_shift_px < patches.refine_radius,
-              "MatchingOptions.correlation.max_keypoint_shift_px",
+              "correlation.max_keypoint_shift_px",
               shift_rule.c_str(),
               correlation.max_keypoint_shift_px);
   CheckOption(min_num_matches >= 8,
-              "MatchingOptions.min_num_matches",
+              "min_num_matches",
               ">= 8 (the relative orientation needs 8 points)",
               min_num_matches);
 }

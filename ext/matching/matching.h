@@ -47,6 +47,7 @@ struct MatchingOptions {
   // them: two-view geometry, bayon pair rows). Without it they are skipped.
   bool overwrite = false;
   int num_threads = -1;  // images, then pairs, in parallel; -1 = all cores
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -24,6 +24,33 @@ std::optional<PairingMode> PairingModeFromName(const std::string& name) {
   return std::nullopt;
 }
 
+void PairingOptions::Register(OptionRegistry* r) {
+  r->AddChoice(
+      "mode",
+      &mode,
+      ChoicesOf<PairingMode>([](PairingMode m) { return PairingModeName(m); },
+                             {PairingMode::kAuto,
+                              PairingMode::kRetrieval,
+                              PairingMode::kExhaustive,
+                              PairingMode::kRing,
+                              PairingMode::kSequential,
+                              PairingMode::kList}),
+      "auto (every pair up to max_exhaustive_images, else "
+      "retrieval), retrieval (the most similar photographs), "
+      "exhaustive, ring or sequential (in name order), or list");
+  r->Add("max_exhaustive_images",
+         &max_exhaustive_images,
+         "auto: every pair up to this many images");
+  r->Add("retrieval_neighbors",
+         &retrieval_neighbors,
+         "retrieval: each image with this many most similar ones");
+  r->Add("num_neighbors",
+         &num_neighbors,
+         "ring/sequential: successors paired with each image");
+  r->Add(
+      "pair_list_path", &pair_list_path, "list: file of 'name1 name2' lines");
+}
+
 const char* PairingModeName(PairingMode mode) {
   switch (mode) {
     case PairingMode::kRing:
@@ -43,20 +70,17 @@ const char* PairingModeName(PairingMode mode) {
 }
 
 void PairingOptions::Check() const {
-  CheckOption(num_neighbors >= 1,
-              "PairingOptions.num_neighbors",
-              ">= 1",
-              num_neighbors);
+  CheckOption(num_neighbors >= 1, "num_neighbors", ">= 1", num_neighbors);
   CheckOption(max_exhaustive_images >= 2,
-              "PairingOptions.max_exhaustive_images",
+              "max_exhaustive_images",
               ">= 2",
               max_exhaustive_images);
   CheckOption(retrieval_neighbors >= 1,
-              "PairingOptions.retrieval_neighbors",
+              "retrieval_neighbors",
               ">= 1",
               retrieval_neighbors);
   if (mode == PairingMode::kList && pair_list_path.empty()) {
-    ThrowInputError("--pairing list needs --pair_list_path");
+    ThrowInputError("mode list needs pair_list_path");
   }
 }
 

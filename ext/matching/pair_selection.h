@@ -9,6 +9,7 @@
 #pragma once
 
 #include "ext/colmap/database.h"
+#include "ext/core/option_registry.h"
 
 #include <Eigen/Core>
 
@@ -48,6 +49,7 @@ struct PairingOptions {
   // Retrieval: each image with this many most similar ones (the pairs are
   // the union, so an image may have more).
   int retrieval_neighbors = 10;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -12,33 +12,33 @@
 
 namespace bayon {
 
+void RelaxationOptions::Register(OptionRegistry* r) {
+  r->Add("neighborhood_fraction",
+         &neighborhood_fraction,
+         "Neighbourhood radius / image size");
+  r->Add("min_support", &min_support, "Consistent neighbours a match needs");
+}
+
 void RelaxationOptions::Check() const {
   CheckOption(neighborhood_fraction > 0 && neighborhood_fraction <= 1,
-              "RelaxationOptions.neighborhood_fraction",
+              "neighborhood_fraction",
               "in (0, 1]",
               neighborhood_fraction);
-  CheckOption(max_neighbors >= 1,
-              "RelaxationOptions.max_neighbors",
-              ">= 1",
-              max_neighbors);
+  CheckOption(max_neighbors >= 1, "max_neighbors", ">= 1", max_neighbors);
   CheckOption(max_relative_distance_difference > 0,
-              "RelaxationOptions.max_relative_distance_difference",
+              "max_relative_distance_difference",
               "> 0",
               max_relative_distance_difference);
   CheckOption(max_angle_deg > 0 && max_angle_deg <= 180,
-              "RelaxationOptions.max_angle_deg",
+              "max_angle_deg",
               "in (0, 180]",
               max_angle_deg);
-  CheckOption(
-      min_support >= 0, "RelaxationOptions.min_support", ">= 0", min_support);
+  CheckOption(min_support >= 0, "min_support", ">= 0", min_support);
   CheckOption(min_support_fraction >= 0 && min_support_fraction <= 1,
-              "RelaxationOptions.min_support_fraction",
+              "min_support_fraction",
               "in [0, 1]",
               min_support_fraction);
-  CheckOption(max_iterations >= 1,
-              "RelaxationOptions.max_iterations",
-              ">= 1",
-              max_iterations);
+  CheckOption(max_iterations >= 1, "max_iterations", ">= 1", max_iterations);
 }
 
 namespace {

@@ -29,6 +29,8 @@
 // propagating.
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <Eigen/Core>
 
 #include <vector>
@@ -60,6 +62,7 @@ struct RelaxationOptions {
   double min_support_fraction = 0.1;
   // Iterations before the remaining ambiguities are settled by strength.
   int max_iterations = 30;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
