@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 namespace bayon {
 namespace {
@@ -98,6 +99,25 @@ void OptionRegistry::Add(const std::string& name,
       ThrowInputError("'", given, "' is not three numbers x,y,z");
     }
     *value = Eigen::Vector3d(numbers[0], numbers[1], numbers[2]);
+  };
+  AddText(name, text, help);
+}
+
+void OptionRegistry::Add(const std::string& name,
+                         unsigned int* value,
+                         const std::string& help) {
+  Text text;
+  text.get = [value] { return std::to_string(*value); };
+  text.set = [value](const std::string& given) {
+    const std::string item = Trimmed(given);
+    char* rest = nullptr;
+    errno = 0;
+    const unsigned long number = std::strtoul(item.c_str(), &rest, 10);
+    if (item.empty() || item[0] == '-' || *rest != '\0' || errno == ERANGE ||
+        number > std::numeric_limits<unsigned int>::max()) {
+      ThrowInputError("'", given, "' is not a whole number >= 0");
+    }
+    *value = static_cast<unsigned int>(number);
   };
   AddText(name, text, help);
 }

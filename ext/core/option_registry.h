@@ -68,6 +68,10 @@ class OptionRegistry {
   void Add(const std::string& name,
            std::vector<double>* value,
            const std::string& help);
+  // A seed, a count that cannot be negative.
+  void Add(const std::string& name,
+           unsigned int* value,
+           const std::string& help);
 
   // An enumeration given by name; `names` holds every value's.
   template <typename Enum>

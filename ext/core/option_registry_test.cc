@@ -149,7 +149,51 @@ TEST(OptionRegistry, TextThatIsNotNumbersIsRefused) {
   EXPECT_THROW(registry.Set("levels", "1,,2"), InputError);
   EXPECT_THROW(registry.Set("levels", "nan"), InputError);
   EXPECT_THROW(ParseNumbers("1e999"), InputError);
+  unsigned int seed = 7;
+  TextRegistry seeds;
+  static_cast<OptionRegistry&>(seeds).Add("seed", &seed, "Seed");
+  seeds.Set("seed", "4294967295");
+  EXPECT_EQ(seed, 4294967295u);
+  EXPECT_THROW(seeds.Set("seed", "-1"), InputError);
+  EXPECT_THROW(seeds.Set("seed", "4294967296"), InputError);
+  EXPECT_THROW(seeds.Set("seed", "1.5"), InputError);
+  EXPECT_EQ(seeds.Get("seed"), "4294967295");
   EXPECT_EQ(part.axis.direction, Eigen::Vector3d::UnitZ());  // untouched
+}
+
+TEST(OptionRegistry, ListsOfChoicesAndSwitches) {
+  std::vector<Shape> shapes = {Shape::kRound};
+  bool left = false, right = true;
+  std::string mode = "auto";
+  TextRegistry registry;
+  OptionRegistry& r = registry;
+  r.AddChoices("shapes",
+               &shapes,
+               {{"round", Shape::kRound}, {"square", Shape::kSquare}},
+               "Shapes");
+  r.AddSwitches("sides", {{"left", &left}, {"right", &right}}, "Sides");
+  r.AddParsed(
+      "mode",
+      [&mode] { return mode; },
+      [&mode](const std::string& text) {
+        if (text.empty()) ThrowInputError("no mode");
+        mode = text;
+      },
+      "Mode");
+  EXPECT_EQ(registry.Get("shapes"), "round");
+  EXPECT_EQ(registry.Get("sides"), "right");
+  registry.Set("shapes", "square, round");
+  EXPECT_EQ(shapes, (std::vector<Shape>{Shape::kSquare, Shape::kRound}));
+  registry.Set("sides", "left");
+  EXPECT_TRUE(left);
+  EXPECT_FALSE(right);  // a list names every switch that is on
+  EXPECT_THROW(registry.Set("shapes", "round,oval"), InputError);
+  EXPECT_THROW(registry.Set("sides", "up"), InputError);
+  EXPECT_EQ(shapes.size(), 2u);  // a refused list changes nothing
+  EXPECT_TRUE(left);
+  registry.Set("mode", "dc,dx0");
+  EXPECT_EQ(registry.Get("mode"), "dc,dx0");
+  EXPECT_THROW(registry.Set("mode", ""), InputError);
 }
 
 TEST(OptionRegistry, CheckNestedNamesTheFieldAsRegistered) {
