@@ -332,7 +332,8 @@ TEST(CompareColmap, RefusesBadInputBeforeRunningColmap) {
                               "--camera_model",
                               "BROWN_BEYER"});
   EXPECT_EQ(result.exit_code, 2) << result.output;
-  EXPECT_NE(result.LastLine().find("--camera_model"), std::string::npos)
+  EXPECT_NE(result.LastLine().find("camera_model must be a COLMAP model"),
+            std::string::npos)
       << result.output;
   // A calibration with the wrong number of parameters for its model.
   result = testing::RunBayon({"compare_colmap",
@@ -343,7 +344,8 @@ TEST(CompareColmap, RefusesBadInputBeforeRunningColmap) {
                               "--camera_params",
                               "500,320,240"});
   EXPECT_EQ(result.exit_code, 2) << result.output;
-  EXPECT_NE(result.LastLine().find("--camera_params"), std::string::npos)
+  EXPECT_NE(result.LastLine().find("camera_params: 3 values"),
+            std::string::npos)
       << result.output;
 
   // Nothing was run or written.

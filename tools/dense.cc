@@ -1,6 +1,4 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "ext/dense/dense.h"
-
 #include "ext/colmap/bayon_tables.h"
 #include "ext/colmap/calibration_json.h"
 #include "ext/colmap/database.h"
@@ -8,6 +6,7 @@
 #include "ext/colmap/ply_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/dense/dense_stage.h"
 #include "ext/georef/crs.h"
 #include "ext/image/image_io.h"
 #include "tools/command.h"
@@ -96,97 +95,32 @@ int RunDense(int argc, char** argv) {
   }
   options.Check();
   in.Check();
+  DenseOutputPaths paths{output_path, fused_path, report_path};
   const fs::path output_folder = fs::absolute(output_path).parent_path();
-  if (fused_path.empty()) fused_path = (output_folder / "fused.ply").string();
-  if (report_path.empty()) {
-    report_path = fs::path(output_path).replace_extension(".json").string();
+  if (paths.fused.empty()) paths.fused = (output_folder / "fused.ply").string();
+  if (paths.report.empty()) {
+    paths.report = fs::path(output_path).replace_extension(".json").string();
   }
-  for (const std::string& path : {output_path, fused_path, report_path}) {
+  for (const std::string& path : {paths.cloud, paths.fused, paths.report}) {
     CheckOutputPath(path, overwrite);
   }
-  CheckOutputPath(fused_path + ".vis", overwrite);
+  CheckOutputPath(paths.fused + ".vis", overwrite);
   if (log_path.empty()) {
     log_path = WorkspaceLogPath(WorkspaceOfStageFile(output_path), "dense");
   }
   command.StartLog(log_path);
 
   const Scene scene = ReadOrientedModel(in.input_path, in.database_path);
-  const bool paper = options.mode == DenseMode::kPaper;
-  const std::vector<MasterSelection> masters =
-      paper ? SelectMasters(scene, options)
-            : SelectMultiViewMasters(scene, options);
-  for (const MasterSelection& selection : masters) {
-    std::string search;
-    for (image_t id : selection.search) {
-      search += (search.empty() ? "" : ", ") + scene.images.at(id).name;
-    }
-    LOG(INFO) << "master " << scene.images.at(selection.master).name
-              << (paper ? ", search images " : ", source views ") << search;
-  }
-  // A photograph that cannot be read costs its own part only: the masters
-  // match without it, and the summary says so.
-  std::map<image_t, std::string> unreadable;
-  std::map<image_t, DenseImage> images;
-  DenseReport report;
-  std::vector<std::vector<image_t>> seen;
-  PointCloud cloud;
-  if (paper) {
-    images = LoadDenseImages(
-        scene, masters, in.image_path, options.highpass_sigma_px, &unreadable);
-    for (const auto& [id, error] : unreadable) {
-      LOG(WARNING) << "left out: " << error;
-    }
-    cloud = DenseReconstruct(scene, images, masters, options, &report, &seen);
-  } else {
-    cloud = DenseReconstructMultiView(
-        scene, in.image_path, masters, options, &report, &seen, &unreadable);
-  }
-  if (cloud.empty()) {
-    throw RunFailure(StrCat("no dense point was matched in ",
-                            masters.size(),
-                            " master images:\n",
-                            report.Summary()));
-  }
-  AddUnmodelledSigma(options, &cloud, &report);
-  // .vis indices: positions in the model's image list.
-  std::map<image_t, uint32_t> index_of;
-  for (const auto& [image_id, image] : scene.images) {
-    index_of.emplace(image_id, static_cast<uint32_t>(index_of.size()));
-  }
-  std::vector<std::vector<uint32_t>> visibility;
-  visibility.reserve(seen.size());
-  for (const std::vector<image_t>& ids : seen) {
-    std::vector<uint32_t>& indices = visibility.emplace_back();
-    for (image_t id : ids) indices.push_back(index_of.at(id));
-  }
-  fs::create_directories(output_folder);
-  fs::create_directories(fs::absolute(fused_path).parent_path());
-  PlyWriteOptions write_options;
-  write_options.comment = "bayon dense";
-  WritePointCloudPly(cloud, output_path, write_options);
-  WriteColmapFusedPly(cloud, fused_path, "bayon dense", &visibility);
-  WriteFileAtomically(report_path,
-                      DenseReportJson(report, options).dump(2) + "\n");
+  const DenseResult result = RunDense(scene, in.image_path, options);
+  WriteDenseOutputs(scene, in.image_path, result, options, paths);
   CopyGeoFrame(in.input_path, output_folder.string());
-  // A picture per master of what became of its cells.
-  const fs::path rejects_folder = output_folder / "rejects";
-  fs::create_directories(rejects_folder);
-  for (const DenseMasterReport& master : report.masters) {
-    if (!master.skipped.empty()) continue;
-    const cv::Mat color =
-        paper ? images.at(master.master).color
-              : LoadDenseColor(scene, master.master, in.image_path);
-    WriteImage(
-        (rejects_folder / fs::path(master.name).stem()).string() + ".png",
-        RejectMap(master, color));
-  }
   std::string left_out;
-  for (const auto& [id, error] : unreadable) {
+  for (const auto& [id, error] : result.unreadable) {
     left_out += "\n  left out: " + error;
   }
-  command.PrintSummary(report.Summary() + left_out + "\n  -> " + output_path +
-                       ", " + fused_path + ", " + rejects_folder.string() +
-                       "/");
+  command.PrintSummary(result.report.Summary() + left_out + "\n  -> " +
+                       paths.cloud + ", " + paths.fused + ", " +
+                       paths.RejectsFolder() + "/");
   return 0;
 }
 

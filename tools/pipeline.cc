@@ -10,17 +10,13 @@
 // with it); stock COLMAP stages, swapped in by the config, run as a child.
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
-#include "ext/image/image_io.h"
 #include "ext/pipeline/pipeline_run.h"
 #include "ext/pipeline/stages.h"
 #include "tools/command.h"
 #include "tools/commands.h"
 
-#include <algorithm>
 #include <filesystem>
-#include <iomanip>
 #include <iostream>
-#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -104,46 +100,6 @@ struct PipelineArguments {
   }
 };
 
-// The workspace's absolute paths, its database and control/; returns the
-// number of photographs, refusing a folder without any.
-size_t ResolveWorkspace(PipelineContext* c) {
-  if (c->image_path.empty()) c->image_path = JoinPath(c->workspace, "images");
-  CheckDirectoryExists(c->image_path, "--image_path");
-  const size_t num_images = ListImages(c->image_path).size();
-  if (num_images == 0) {
-    ThrowInputError(c->image_path,
-                    ": no images found (looked for jpg, png, tif, bmp, "
-                    "pgm/ppm, webp, jp2, exr, hdr)");
-  }
-  c->image_path = fs::absolute(c->image_path).lexically_normal().string();
-  c->workspace = fs::absolute(c->workspace).lexically_normal().string();
-  c->database = JoinPath(c->workspace, "database.db");
-  if (fs::is_directory(JoinPath(c->workspace, "control"))) {
-    c->control = JoinPath(c->workspace, "control");
-  }
-  return num_images;
-}
-
-// The indices of the first and last stage to run.
-std::pair<int, int> SelectedStages(const std::vector<Stage>& stages,
-                                   const std::string& from_stage,
-                                   const std::string& to_stage) {
-  auto index_of = [&](const std::string& name) {
-    for (size_t i = 0; i < stages.size(); ++i) {
-      if (stages[i].name == name) return static_cast<int>(i);
-    }
-    ThrowInputError("stage ", name, " is not part of this pipeline's run");
-  };
-  const int first = from_stage.empty() ? 0 : index_of(from_stage);
-  const int last = to_stage.empty() ? static_cast<int>(stages.size()) - 1
-                                    : index_of(to_stage);
-  if (first > last) {
-    ThrowInputError(
-        "--from_stage ", from_stage, " comes after --to_stage ", to_stage);
-  }
-  return {first, last};
-}
-
 // Every stage logs in full to W/logs/<stage>.log; the terminal shows the
 // pipeline's progress, the stages' progress bars, summaries and warnings.
 void LogStagesToTheirFiles() {
@@ -152,44 +108,6 @@ void LogStagesToTheirFiles() {
   for (int severity = 0; severity < google::NUM_SEVERITIES; ++severity) {
     google::SetLogDestination(severity, "");
   }
-}
-
-// The table of the selected stages, and the summary line: what ran and
-// where the products are, those this run (or an earlier one) made.
-void PrintOutcome(const CommandLine& command,
-                  const PipelineContext& c,
-                  const PipelineRun& run) {
-  std::ostringstream table;
-  table << "\n  stage            program  status         time\n";
-  int num_ran = 0, num_skipped = 0;
-  for (const StageRun& stage : run.runs()) {
-    if (stage.status == "not selected") continue;
-    num_ran += stage.status == "ran";
-    num_skipped += stage.status == "skipped";
-    table << "  " << std::left << std::setw(17) << stage.name << std::setw(9)
-          << stage.program << std::setw(10) << stage.status << std::right
-          << std::setw(10)
-          << (stage.status == "ran" ? FormatRunSeconds(stage.seconds) : "-")
-          << "\n";
-  }
-  std::cout << table.str() << std::endl;
-  std::string products;
-  for (const auto& [label, path] :
-       std::vector<std::pair<std::string, std::string>>{
-           {"report", "report.html"},
-           {"model", "model/model.glb"},
-           {"viewer", "viewer/index.html"}}) {
-    if (fs::exists(JoinPath(c.workspace, path))) {
-      products += StrCat("; ", label, ": ", JoinPath(c.workspace, path));
-    }
-  }
-  command.PrintSummary(
-      StrCat(num_ran,
-             " stages ran, ",
-             num_skipped,
-             " up to date, in ",
-             FormatRunSeconds(run.seconds()),
-             products.empty() ? StrCat(" -> ", c.workspace) : products));
 }
 
 }  // namespace
@@ -216,12 +134,13 @@ int RunPipeline(int argc, char** argv) {
   PipelineContext& c = arguments.context;
   const size_t num_images = ResolveWorkspace(&c);
   const std::vector<Stage> stages = MakeStages(c, config);
-  const auto [first, last] =
-      SelectedStages(stages, arguments.from_stage, arguments.to_stage);
+  const StageSelection selection = SelectStages(
+      stages, arguments.from_stage, arguments.to_stage, arguments.force);
   CheckStageOptions(stages, config.description);
   // Matching and everything after it need a second photograph.
-  if (num_images < 2 && stages[last].name != "import" &&
-      stages[last].name != "interior" && stages[last].name != "features") {
+  if (num_images < 2 && stages[selection.last].name != "import" &&
+      stages[selection.last].name != "interior" &&
+      stages[selection.last].name != "features") {
     ThrowInputError(c.image_path,
                     ": one image; a model needs two or more overlapping "
                     "photographs (--to_stage features stops before matching)");
@@ -237,14 +156,10 @@ int RunPipeline(int argc, char** argv) {
   LOG(INFO) << "config: "
             << (config.description.empty() ? "(built-in defaults)"
                                            : config.description);
-  StageSelection selection;
-  selection.first = first;
-  selection.last = last;
-  selection.force = arguments.force;
-  selection.from_stage = !arguments.from_stage.empty();
   PipelineRun run(c, config.description, stages, selection, RunBayonCommand);
   if (!run.Run()) return 1;
-  PrintOutcome(command, c, run);
+  std::cout << StageTable(run.runs()) << std::endl;
+  command.PrintSummary(PipelineSummaryLine(run, c.workspace));
   return 0;
 }
 

@@ -21,7 +21,6 @@ namespace bayon {
 int RunTexture(int argc, char** argv) {
   OrientedInput in;
   std::string mesh_path, output_path, log_path;
-  std::vector<std::string> formats = {"obj", "ply", "wrl", "glb"};
   TextureOptions options;
   ModelExportOptions export_options;
   CommandLine command(
@@ -42,9 +41,7 @@ int RunTexture(int argc, char** argv) {
                 "mesh/mesh.ply and model/ under it");
   app.add_option("--mesh_path", mesh_path, "Mesh to texture (PLY, OBJ, OFF)");
   app.add_option("--output_path", output_path, "Folder of the textured model");
-  app.add_option("--stem", export_options.stem, "File name of the model files");
-  app.add_option("--formats", formats, "Model formats: obj, ply, wrl, glb")
-      ->delimiter(',');
+  command.AddOptions(&export_options);
   command.AddOptions(&options);
   bool overwrite = false;
   app.add_option("--overwrite", overwrite, "Replace existing output files");
@@ -63,39 +60,13 @@ int RunTexture(int argc, char** argv) {
         "and --output_path");
   }
   options.Check();
-  export_options.obj = export_options.ply = export_options.vrml =
-      export_options.gltf = false;
-  for (const std::string& format : formats) {
-    if (format == "obj") {
-      export_options.obj = true;
-    } else if (format == "ply") {
-      export_options.ply = true;
-    } else if (format == "wrl") {
-      export_options.vrml = true;
-    } else if (format == "glb") {
-      export_options.gltf = true;
-    } else {
-      ThrowInputError(
-          "--formats: unknown '", format, "' (expected obj, ply, wrl, glb)");
-    }
-  }
+  export_options.Check();
   in.Check();
   CheckFileExists(mesh_path, "--mesh_path");
-  if (export_options.stem.empty() ||
-      export_options.stem.find_first_of("/\\") != std::string::npos ||
-      export_options.stem == "." || export_options.stem == "..") {
-    ThrowInputError(
-        "--stem must be a plain file name (got '", export_options.stem, "')");
-  }
   const std::string report_path = output_path + "/texture.json";
   CheckOutputPath(report_path, overwrite);
-  std::vector<std::string> extensions = {".png"};
-  if (export_options.obj) extensions.insert(extensions.end(), {".obj", ".mtl"});
-  if (export_options.ply) extensions.push_back(".ply");
-  if (export_options.vrml) extensions.push_back(".wrl");
-  if (export_options.gltf) extensions.push_back(".glb");
-  for (const std::string& ext : extensions) {
-    CheckOutputPath(output_path + "/" + export_options.stem + ext, overwrite);
+  for (const std::string& name : export_options.FileNames()) {
+    CheckOutputPath(output_path + "/" + name, overwrite);
   }
   if (log_path.empty()) {
     log_path = WorkspaceLogPath(

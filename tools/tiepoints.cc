@@ -37,61 +37,13 @@ int RunTiePoints(int argc, char** argv) {
                  colmap_output_path,
                  "Also write the tie points as a new COLMAP database here");
   app.add_option("--overwrite", overwrite, "1: replace an existing export");
-  app.add_option("--manual_path",
-                 options.manual_path,
-                 "Manual image measurements: NAME IMAGE_NAME X Y [SIGMA]");
-  app.add_option("--manual_sigma_px",
-                 options.manual_sigma_px,
-                 "Sigma of manual measurements without one, pixels");
-  app.add_option("--targets_path",
-                 options.targets_path,
-                 "Coded targets' measurements (bayon targets --output_path): "
-                 "named tie points beside the manual ones");
-  app.add_option("--grid_cols", options.grid_cols, "Candidate grid columns");
-  app.add_option("--grid_rows", options.grid_rows, "Candidate grid rows");
-  app.add_option("--candidates_per_cell",
-                 options.candidates_per_cell,
-                 "Best-textured keypoints per grid cell");
-  app.add_option("--min_texture_score",
-                 options.min_texture_score,
-                 "Weakest patch texture followed (grey^2 / px^2)");
-  app.add_option("--correlation_radius",
-                 options.correlation_radius,
-                 "Half side of the correlation window, pixels");
-  app.add_option(
-      "--min_ncc", options.min_ncc, "Smallest correlation peak accepted");
-  app.add_option("--min_ncc_margin",
-                 options.min_ncc_margin,
-                 "Margin of the best peak over any other");
-  app.add_option("--max_peaks",
-                 options.max_peaks,
-                 "Correlation peaks tried by least-squares matching");
-  app.add_option("--across_px",
-                 options.across_px,
-                 "Search +- this many pixels across the epipolar line");
-  app.add_option(
-      "--max_band_px", options.max_band_px, "Longer bands are not searched");
-  app.add_option("--max_epipolar_px",
-                 options.max_epipolar_px,
-                 "Largest distance from another observation's epipolar line");
-  app.add_option("--max_chain_px",
-                 options.max_chain_px,
-                 "Largest disagreement of the previous link's patch, pixels");
-  app.add_option("--min_images", options.min_images, "Fewest images a point");
-  app.add_option("--max_images", options.max_images, "Most images a point");
-  app.add_option("--min_distance_px",
-                 options.min_distance_px,
-                 "Points closer than this in an image are one");
-  command.AddOptions("matching",
-                     &options.matching,
+  command.AddOptions(&options,
                      {{"patch_radius", "matching.lsm.patch_radius"},
                       {"max_sigma0", "matching.max_sigma0"},
                       {"min_correlation", "matching.min_correlation"},
                       {"max_sigma_px", "matching.max_sigma_px"},
                       {"max_shift_px", "matching.max_shift_px"},
                       {"max_backmatch_px", "matching.max_backmatch_px"}});
-  app.add_option(
-      "--num_threads", options.num_threads, "Threads (-1 = all cores)");
   app.add_option("--report_path", report_path, "Write the summary as JSON");
   app.add_option("--log_path",
                  log_path,
@@ -112,38 +64,17 @@ int RunTiePoints(int argc, char** argv) {
   }
   std::printf("%s", TiePointTables(summary).c_str());
   std::fflush(stdout);
-  int num_three = 0;
-  for (size_t n = 3; n < summary.points_by_images.size(); ++n) {
-    num_three += summary.points_by_images[n];
-  }
-  command.PrintSummary(
-      StrCat(summary.num_points,
-             " tie points (",
-             num_three,
-             " in 3 or more images, ",
-             summary.mean_images_per_point,
-             " images on average, median sigma ",
-             summary.median_sigma_px,
-             " px) from ",
-             summary.num_followed,
-             " candidates over ",
-             summary.num_surfaces,
-             " surfaces",
-             summary.num_manual_points > 0
-                 ? StrCat(", ", summary.num_manual_points, " manual points")
-                 : std::string(),
-             summary.num_target_points > 0
-                 ? StrCat(", ", summary.num_target_points, " coded targets")
-                 : std::string(),
-             colmap_output_path.empty() ? std::string()
-                                        : StrCat(", COLMAP export of ",
-                                                 summary.colmap_pairs,
-                                                 " pairs -> ",
-                                                 colmap_output_path),
-             ", ",
-             summary.seconds,
-             " s -> ",
-             database_path));
+  command.PrintSummary(StrCat(TiePointSummaryLine(summary),
+                              colmap_output_path.empty()
+                                  ? std::string()
+                                  : StrCat(", COLMAP export of ",
+                                           summary.colmap_pairs,
+                                           " pairs -> ",
+                                           colmap_output_path),
+                              ", ",
+                              summary.seconds,
+                              " s -> ",
+                              database_path));
   const int num_named = summary.num_manual_points + summary.num_target_points;
   return summary.num_points + num_named > 0 ? 0 : 1;
 }

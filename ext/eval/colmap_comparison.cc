@@ -416,12 +416,48 @@ std::string Display(const std::string& path, const fs::path& workspace) {
 
 }  // namespace
 
+void CompareColmapOptions::Register(OptionRegistry* r) {
+  r->Add("workspace_path",
+         &workspace_path,
+         "bayon workspace (after bayon pipeline)");
+  r->Add("image_path",
+         &image_path,
+         "Image folder (default: the one in <workspace>/pipeline.json, else "
+         "<workspace>/images)");
+  r->Add("bayon_model_path",
+         &bayon_model_path,
+         "bayon's model (default <workspace>/sparse/adjusted)");
+  r->Add("ground_truth_path",
+         &ground_truth_path,
+         "True COLMAP model or a synthetic workspace's gt/ folder");
+  r->AddChoice("matching",
+               &matching,
+               {{"exhaustive", "exhaustive"}, {"sequential", "sequential"}},
+               "exhaustive or sequential");
+  r->Add("num_neighbors",
+         &num_neighbors,
+         "Sequential matching: successors matched with each image");
+  r->Add("camera_model",
+         &camera_model,
+         "COLMAP camera model of the one shared camera");
+  r->Add("camera_params",
+         &camera_params,
+         "The calibrated camera bayon was given (COLMAP's order): COLMAP gets "
+         "it too, held fixed; empty: both calibrate");
+  r->Add("max_image_size",
+         &max_image_size,
+         "COLMAP SIFT: longest image side in pixels");
+  r->Add("num_threads", &num_threads, "-1 = all cores");
+  r->Add("overwrite",
+         &overwrite,
+         "Run COLMAP again even where a finished run is in <workspace>/colmap");
+}
+
 void CompareColmapOptions::Check() const {
-  CheckOption(num_neighbors >= 1, "--num_neighbors", ">= 1", num_neighbors);
-  CheckOption(
-      max_image_size >= 16, "--max_image_size", ">= 16", max_image_size);
+  CheckOption(num_neighbors >= 1, "num_neighbors", ">= 1", num_neighbors);
+  CheckOption(max_image_size >= 16, "max_image_size", ">= 16", max_image_size);
   CheckOption(num_threads == -1 || num_threads >= 1,
-              "--num_threads",
+              "num_threads",
               "-1 or >= 1",
               num_threads);
   const auto model = CameraModelIdFromName(camera_model);
@@ -431,7 +467,7 @@ void CompareColmapOptions::Check() const {
       if (!IsColmapCameraModel(info.id)) continue;
       names += (names.empty() ? "" : ", ") + std::string(info.name);
     }
-    ThrowInputError("--camera_model must be a COLMAP model: ",
+    ThrowInputError("camera_model must be a COLMAP model: ",
                     names,
                     " (got ",
                     camera_model,
@@ -441,7 +477,7 @@ void CompareColmapOptions::Check() const {
     CheckNumCameraParams(
         *model,
         std::count(camera_params.begin(), camera_params.end(), ',') + 1,
-        "--camera_params");
+        "camera_params");
   }
 }
 
@@ -719,6 +755,88 @@ std::string ComparisonSummary(const Json& c,
                  " -> ",
                  output);
   return text;
+}
+
+ComparisonInputs ReadComparisonInputs(CompareColmapOptions* options,
+                                      bool camera_params_given,
+                                      bool camera_model_given) {
+  CheckDirectoryExists(options->workspace_path, "--workspace_path");
+  ComparisonInputs inputs;
+  inputs.workspace = fs::absolute(options->workspace_path).lexically_normal();
+  inputs.pipeline = ReadPipelineRecord(inputs.workspace);
+  if (!camera_params_given && !inputs.pipeline.camera_params.empty()) {
+    options->camera_params = inputs.pipeline.camera_params;
+    if (!camera_model_given && !inputs.pipeline.camera_model.empty()) {
+      options->camera_model = inputs.pipeline.camera_model;
+    }
+  }
+  options->Check();
+  if (options->bayon_model_path.empty()) {
+    options->bayon_model_path =
+        (inputs.workspace / "sparse" / "adjusted").string();
+  }
+  if (!fs::is_directory(options->bayon_model_path)) {
+    ThrowInputError(options->bayon_model_path,
+                    ": no bayon model to compare (run bayon pipeline first, "
+                    "or give --bayon_model_path)");
+  }
+  // With its full calibration (calibration.json): the FULL_OPENCV cameras
+  // of the COLMAP files cannot express every Brown/Beyer parameter (affinity
+  // and shear), which would add their fit residual to bayon's errors.
+  const std::string database = (inputs.workspace / "database.db").string();
+  inputs.bayon_model = ReadOrientedModel(options->bayon_model_path,
+                                         fs::exists(database) ? database : "");
+  if (options->image_path.empty()) {
+    options->image_path = DefaultImagePath(inputs.workspace, inputs.pipeline);
+  }
+  options->image_path = fs::absolute(options->image_path).string();
+  inputs.image_names = ListImages(options->image_path);
+  if (inputs.image_names.empty()) {
+    ThrowInputError(options->image_path, ": image folder holds no images");
+  }
+  if (!options->ground_truth_path.empty()) {
+    CheckDirectoryExists(options->ground_truth_path, "--ground_truth_path");
+    const fs::path root(options->ground_truth_path);
+    inputs.truth =
+        ReadModel(fs::is_directory(root / "sparse") ? (root / "sparse").string()
+                                                    : root.string());
+  }
+  return inputs;
+}
+
+ComparisonOutcome RunComparison(const CompareColmapOptions& options,
+                                const ComparisonInputs& inputs) {
+  const fs::path colmap_dir = inputs.workspace / "colmap";
+  ComparisonOutcome outcome;
+  outcome.run = RunOrReuseColmap(options, colmap_dir);
+  const ColmapRun& run = outcome.run;
+  const std::string colmap_model_path =
+      run.model_path.empty() ? "" : (colmap_dir / run.model_path).string();
+  const Scene colmap_model =
+      colmap_model_path.empty() ? Scene() : ReadModel(colmap_model_path);
+  outcome.comparison = CompareModels(options,
+                                     inputs.workspace,
+                                     inputs.pipeline,
+                                     inputs.image_names,
+                                     inputs.bayon_model,
+                                     run,
+                                     colmap_model_path,
+                                     colmap_model,
+                                     inputs.truth);
+  outcome.table = ComparisonTable(outcome.comparison);
+  outcome.json_path = (colmap_dir / "comparison.json").string();
+  WriteFileAtomically(outcome.json_path, outcome.comparison.dump(2) + "\n");
+  WriteFileAtomically((colmap_dir / "comparison.txt").string(), outcome.table);
+  if (colmap_model_path.empty()) {
+    outcome.failure = StrCat("colmap mapper made no model (",
+                             run.mapper_message,
+                             "; log: ",
+                             (colmap_dir / "mapper.log").string(),
+                             "); the comparison, with COLMAP's column empty, "
+                             "is in ",
+                             outcome.json_path);
+  }
+  return outcome;
 }
 
 }  // namespace bayon

@@ -13,6 +13,7 @@
 // W/colmap/colmap.json, written last, records a finished COLMAP run (stage
 // times, the model); a complete earlier run is reused unless overwrite.
 
+#include "ext/core/option_registry.h"
 #include "ext/core/scene.h"
 
 #include <nlohmann/json.hpp>
@@ -50,6 +51,7 @@ struct CompareColmapOptions {
   bool overwrite = false;
 
   // Refuses bad values with one line naming the option.
+  void Register(OptionRegistry* registry);
   void Check() const;
 
   bool calibrated() const { return !camera_params.empty(); }
@@ -113,6 +115,38 @@ nlohmann::ordered_json CompareModels(
 
 // comparison.txt: the comparison as a table.
 std::string ComparisonTable(const nlohmann::ordered_json& comparison);
+
+// What the comparison reads before COLMAP runs, each checked.
+struct ComparisonInputs {
+  std::filesystem::path workspace;  // absolute
+  PipelineRecord pipeline;
+  Scene bayon_model;  // with its calibration.json where there is one
+  std::vector<std::string> image_names;
+  std::optional<Scene> truth;
+};
+
+// Reads the workspace, bayon's model, the photographs and the truth, and
+// fills the options' defaults from them. COLMAP knows what bayon knew: the
+// calibrated camera bayon's import was given (pipeline.json) unless
+// `camera_params_given` (the command named one, or none with "").
+ComparisonInputs ReadComparisonInputs(CompareColmapOptions* options,
+                                      bool camera_params_given,
+                                      bool camera_model_given);
+
+struct ComparisonOutcome {
+  ColmapRun run;
+  nlohmann::ordered_json comparison;
+  std::string table;      // ComparisonTable
+  std::string json_path;  // <workspace>/colmap/comparison.json
+  // Why COLMAP's column is empty (the mapper made no model); empty when it
+  // is not.
+  std::string failure;
+};
+
+// Runs COLMAP in <workspace>/colmap (or reuses its finished run), sets its
+// model beside bayon's and writes comparison.json and comparison.txt.
+ComparisonOutcome RunComparison(const CompareColmapOptions& options,
+                                const ComparisonInputs& inputs);
 
 // The command's summary line.
 std::string ComparisonSummary(const nlohmann::ordered_json& comparison,

@@ -41,6 +41,54 @@ KeypointRefinementOptions DefaultTieMatchingOptions() {
   return options;
 }
 
+void TiePointOptions::Register(OptionRegistry* r) {
+  r->Add("manual_path",
+         &manual_path,
+         "Manual image measurements: NAME IMAGE_NAME X Y [SIGMA]");
+  r->Add("manual_sigma_px",
+         &manual_sigma_px,
+         "Sigma of manual measurements without one, pixels");
+  r->Add("targets_path",
+         &targets_path,
+         "Coded targets' measurements (bayon targets --output_path): named "
+         "tie points beside the manual ones");
+  r->Add("grid_cols", &grid_cols, "Candidate grid columns");
+  r->Add("grid_rows", &grid_rows, "Candidate grid rows");
+  r->Add("candidates_per_cell",
+         &candidates_per_cell,
+         "Best-textured keypoints per grid cell");
+  r->Add("min_texture_score",
+         &min_texture_score,
+         "Weakest patch texture followed (grey^2 / px^2)");
+  r->Add("correlation_radius",
+         &correlation_radius,
+         "Half side of the correlation window, pixels");
+  r->Add("min_ncc", &min_ncc, "Smallest correlation peak accepted");
+  r->Add("min_ncc_margin",
+         &min_ncc_margin,
+         "Margin of the best peak over any other");
+  r->Add("max_peaks",
+         &max_peaks,
+         "Correlation peaks tried by least-squares matching");
+  r->Add("across_px",
+         &across_px,
+         "Search +- this many pixels across the epipolar line");
+  r->Add("max_band_px", &max_band_px, "Longer bands are not searched");
+  r->Add("max_epipolar_px",
+         &max_epipolar_px,
+         "Largest distance from another observation's epipolar line");
+  r->Add("max_chain_px",
+         &max_chain_px,
+         "Largest disagreement of the previous link's patch, pixels");
+  r->Add("min_images", &min_images, "Fewest images a point");
+  r->Add("max_images", &max_images, "Most images a point");
+  r->Add("min_distance_px",
+         &min_distance_px,
+         "Points closer than this in an image are one");
+  r->AddNested("matching", &matching);
+  r->Add("num_threads", &num_threads, "Threads (-1 = all cores)");
+}
+
 void TiePointOptions::Check() const {
   CheckNested("matching", matching);
   CheckOption(grid_cols >= 1, "TiePointOptions.grid_cols", ">= 1", grid_cols);
@@ -913,6 +961,31 @@ nlohmann::ordered_json TiePointSummaryJson(const TiePointSummary& summary) {
   json["colmap_pairs"] = summary.colmap_pairs;
   json["seconds"] = summary.seconds;
   return json;
+}
+
+std::string TiePointSummaryLine(const TiePointSummary& summary) {
+  int num_three = 0;
+  for (size_t n = 3; n < summary.points_by_images.size(); ++n) {
+    num_three += summary.points_by_images[n];
+  }
+  return StrCat(summary.num_points,
+                " tie points (",
+                num_three,
+                " in 3 or more images, ",
+                summary.mean_images_per_point,
+                " images on average, median sigma ",
+                summary.median_sigma_px,
+                " px) from ",
+                summary.num_followed,
+                " candidates over ",
+                summary.num_surfaces,
+                " surfaces",
+                summary.num_manual_points > 0
+                    ? StrCat(", ", summary.num_manual_points, " manual points")
+                    : std::string(),
+                summary.num_target_points > 0
+                    ? StrCat(", ", summary.num_target_points, " coded targets")
+                    : std::string());
 }
 
 std::string TiePointTables(const TiePointSummary& summary) {

@@ -126,6 +126,8 @@ struct TiePointOptions {
   // "target", beside the manual ones (a name in both is refused).
   std::string targets_path;
   int num_threads = -1;
+  // Every field, the least-squares matching's as matching.*.
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming field, value, rule
 };
 
@@ -205,5 +207,7 @@ nlohmann::ordered_json TiePointSummaryJson(const TiePointSummary& summary);
 // Its tables per image, points by images, links and least-squares
 // rejections, as the command prints them.
 std::string TiePointTables(const TiePointSummary& summary);
+// Its summary in one sentence: points, how many images, sigma, candidates.
+std::string TiePointSummaryLine(const TiePointSummary& summary);
 
 }  // namespace bayon

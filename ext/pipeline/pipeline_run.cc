@@ -150,4 +150,66 @@ std::string FormatRunSeconds(double seconds) {
   return out.str();
 }
 
+StageSelection SelectStages(const std::vector<Stage>& stages,
+                            const std::string& from_stage,
+                            const std::string& to_stage,
+                            bool force) {
+  auto index_of = [&](const std::string& name) {
+    for (size_t i = 0; i < stages.size(); ++i) {
+      if (stages[i].name == name) return static_cast<int>(i);
+    }
+    ThrowInputError("stage ", name, " is not part of this pipeline's run");
+  };
+  StageSelection selection;
+  selection.first = from_stage.empty() ? 0 : index_of(from_stage);
+  selection.last = to_stage.empty() ? static_cast<int>(stages.size()) - 1
+                                    : index_of(to_stage);
+  if (selection.first > selection.last) {
+    ThrowInputError(
+        "--from_stage ", from_stage, " comes after --to_stage ", to_stage);
+  }
+  selection.force = force;
+  selection.from_stage = !from_stage.empty();
+  return selection;
+}
+
+std::string StageTable(const std::vector<StageRun>& runs) {
+  std::ostringstream table;
+  table << "\n  stage            program  status         time\n";
+  for (const StageRun& stage : runs) {
+    if (stage.status == "not selected") continue;
+    table << "  " << std::left << std::setw(17) << stage.name << std::setw(9)
+          << stage.program << std::setw(10) << stage.status << std::right
+          << std::setw(10)
+          << (stage.status == "ran" ? FormatRunSeconds(stage.seconds) : "-")
+          << "\n";
+  }
+  return table.str();
+}
+
+std::string PipelineSummaryLine(const PipelineRun& run,
+                                const std::string& workspace) {
+  int num_ran = 0, num_skipped = 0;
+  for (const StageRun& stage : run.runs()) {
+    num_ran += stage.status == "ran";
+    num_skipped += stage.status == "skipped";
+  }
+  std::string products;
+  for (const auto& [label, path] :
+       std::vector<std::pair<std::string, std::string>>{
+           {"report", "report.html"},
+           {"model", "model/model.glb"},
+           {"viewer", "viewer/index.html"}}) {
+    if (std::filesystem::exists(JoinPath(workspace, path))) {
+      products += StrCat("; ", label, ": ", JoinPath(workspace, path));
+    }
+  }
+  return StrCat(num_ran,
+                " stages ran, ",
+                num_skipped,
+                " up to date, in ",
+                FormatRunSeconds(run.seconds()),
+                products.empty() ? StrCat(" -> ", workspace) : products);
+}
+
 }  // namespace bayon

@@ -64,7 +64,23 @@ class PipelineRun {
   bool ran_any_ = false;
 };
 
+// The stages from `from_stage` to `to_stage` (empty: the first, the last);
+// InputError for a stage not among `stages`, or a first after the last.
+StageSelection SelectStages(const std::vector<Stage>& stages,
+                            const std::string& from_stage,
+                            const std::string& to_stage,
+                            bool force);
+
 // "12.3 s", or "2 min 05 s" from a minute on: the terminal's times.
 std::string FormatRunSeconds(double seconds);
+
+// The table of the selected stages (name, program, status, time), as the
+// terminal shows it at the end of a run.
+std::string StageTable(const std::vector<StageRun>& runs);
+
+// What ran, how long it took, and where the products are that this run or
+// an earlier one made: the report, the model and the viewer.
+std::string PipelineSummaryLine(const PipelineRun& run,
+                                const std::string& workspace);
 
 }  // namespace bayon

@@ -106,6 +106,41 @@ TEST(PipelineRun, SelectionForceAndFromStage) {
   EXPECT_EQ(p.statuses, Strings({"ran", "not selected", "not selected"}));
 }
 
+TEST(PipelineRun, StagesSelectedByName) {
+  FakePipeline p("run_select_names");
+  const StageSelection all = SelectStages(p.stages, "", "", false);
+  EXPECT_EQ(all.first, 0);
+  EXPECT_EQ(all.last, 2);
+  EXPECT_FALSE(all.from_stage);
+  const StageSelection b = SelectStages(p.stages, "b", "b", true);
+  EXPECT_EQ(b.first, 1);
+  EXPECT_EQ(b.last, 1);
+  EXPECT_TRUE(b.force);
+  EXPECT_TRUE(b.from_stage);
+  EXPECT_THROW(SelectStages(p.stages, "x", "", false), InputError);
+  EXPECT_THROW(SelectStages(p.stages, "c", "a", false), InputError);
+}
+
+TEST(PipelineRun, TableAndSummaryLineOfARun) {
+  FakePipeline p("run_table");
+  ASSERT_TRUE(p.Run());
+  PipelineRun run(
+      p.c,
+      "test.ini",
+      p.stages,
+      {1, 2, false, false},
+      [](const std::string&, const std::vector<std::string>&) { return 0; });
+  ASSERT_TRUE(run.Run());
+  const std::string table = StageTable(run.runs());
+  EXPECT_EQ(table.find("  a "), std::string::npos) << table;  // not selected
+  EXPECT_NE(table.find("  b                bayon    skipped"),
+            std::string::npos)
+      << table;
+  const std::string line = PipelineSummaryLine(run, p.c.workspace);
+  EXPECT_EQ(line.rfind("0 stages ran, 2 up to date, in ", 0), 0u) << line;
+  EXPECT_NE(line.find(" -> " + p.c.workspace), std::string::npos) << line;
+}
+
 TEST(PipelineRun, AStageThatProducesNothingStopsTheRunWithoutAStamp) {
   FakePipeline p("run_nothing");
   EXPECT_FALSE(p.Run({0, 2, false, false}, "b", 1));

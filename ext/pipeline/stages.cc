@@ -5,6 +5,7 @@
 #include "ext/colmap/model_io.h"
 #include "ext/core/errors.h"
 #include "ext/core/file_util.h"
+#include "ext/image/image_io.h"
 
 #include <CLI/CLI.hpp>
 
@@ -494,6 +495,24 @@ std::vector<Stage> MakeStages(const PipelineContext& c,
   maker.AddClosingStages();
   maker.ApplyConfigSections();
   return maker.stages;
+}
+
+size_t ResolveWorkspace(PipelineContext* c) {
+  if (c->image_path.empty()) c->image_path = JoinPath(c->workspace, "images");
+  CheckDirectoryExists(c->image_path, "--image_path");
+  const size_t num_images = ListImages(c->image_path).size();
+  if (num_images == 0) {
+    ThrowInputError(c->image_path,
+                    ": no images found (looked for jpg, png, tif, bmp, "
+                    "pgm/ppm, webp, jp2, exr, hdr)");
+  }
+  c->image_path = fs::absolute(c->image_path).lexically_normal().string();
+  c->workspace = fs::absolute(c->workspace).lexically_normal().string();
+  c->database = JoinPath(c->workspace, "database.db");
+  if (fs::is_directory(JoinPath(c->workspace, "control"))) {
+    c->control = JoinPath(c->workspace, "control");
+  }
+  return num_images;
 }
 
 std::vector<std::string> CommandWords(const Stage& stage, bool overwrite) {

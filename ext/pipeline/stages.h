@@ -69,6 +69,11 @@ struct PipelineContext {
   int num_threads = 2;
 };
 
+// Makes the workspace and image paths absolute (the images by default in
+// <workspace>/images) and finds the database and control/ in it; returns
+// the number of photographs, refusing a folder without any.
+size_t ResolveWorkspace(PipelineContext* c);
+
 // The stages with the pipeline's paths; each stage's config section is
 // applied on top (a key given there replaces the pipeline's value).
 std::vector<Stage> MakeStages(const PipelineContext& c,

@@ -120,16 +120,37 @@ std::string LowerExtension(const std::string& path) {
 
 }  // namespace
 
+void ModelExportOptions::Register(OptionRegistry* r) {
+  r->Add("stem", &stem, "File name of the model files");
+  r->AddSwitches("formats",
+                 {{"obj", &obj}, {"ply", &ply}, {"wrl", &vrml}, {"glb", &gltf}},
+                 "Model formats: obj, ply, wrl, glb");
+}
+
+void ModelExportOptions::Check() const {
+  if (stem.empty() || stem.find_first_of("/\\ \t\"") != std::string::npos ||
+      stem == "." || stem == "..") {
+    ThrowInputError("stem must be a plain file name (got '", stem, "')");
+  }
+  if (!obj && !ply && !vrml && !gltf) {
+    ThrowInputError("formats: none given (obj, ply, wrl, glb)");
+  }
+}
+
+std::vector<std::string> ModelExportOptions::FileNames() const {
+  std::vector<std::string> names = {stem + ".png"};
+  if (obj) names.insert(names.end(), {stem + ".obj", stem + ".mtl"});
+  if (ply) names.push_back(stem + ".ply");
+  if (vrml) names.push_back(stem + ".wrl");
+  if (gltf) names.push_back(stem + ".glb");
+  return names;
+}
+
 std::vector<std::string> WriteTexturedModel(const TexturedModel& model,
                                             const std::string& output_dir,
                                             const ModelExportOptions& options) {
   CheckModel(model);
-  if (options.stem.empty() ||
-      options.stem.find_first_of("/\\ \t\"") != std::string::npos) {
-    ThrowInputError("ModelExportOptions.stem must be a plain file name (got '",
-                    options.stem,
-                    "')");
-  }
+  options.Check();
   std::error_code error;
   fs::create_directories(output_dir, error);
   if (!fs::is_directory(output_dir)) {

@@ -25,6 +25,7 @@
 // Every file is written atomically (temporary name, rename).
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/point_cloud.h"
 
 #include <opencv2/core.hpp>
@@ -55,6 +56,13 @@ struct ModelExportOptions {
   // the CRS and the origin the model's coordinates are relative to), put
   // into the .glb as asset.extras.georeference. Empty: none.
   std::string georeference_json;
+  // stem, and the formats as one list: obj, ply, wrl, glb.
+  void Register(OptionRegistry* registry);
+  // The stem a plain file name, at least one format.
+  void Check() const;
+  // The files WriteTexturedModel writes, in its order: <stem>.png, then
+  // .obj and .mtl, .ply, .wrl, .glb as asked for.
+  std::vector<std::string> FileNames() const;
 };
 
 // The paths written, in the order above (the PNG atlas first).
