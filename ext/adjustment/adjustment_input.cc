@@ -243,6 +243,14 @@ Eigen::Matrix2d FlooredCovariance(const Eigen::Matrix2d& covariance,
          eigen.eigenvectors().transpose();
 }
 
+std::vector<std::pair<std::string, TiePointSource>> TiePointSourceChoices() {
+  return ChoicesOf<TiePointSource>(TiePointSourceName,
+                                   {TiePointSource::kAuto,
+                                    TiePointSource::kAlsm,
+                                    TiePointSource::kModel,
+                                    TiePointSource::kBoth});
+}
+
 void AdjustmentInputOptions::Register(OptionRegistry* r) {
   datum.Register(r);
   r->Add("upright",
@@ -260,11 +268,7 @@ void AdjustmentInputOptions::Register(OptionRegistry* r) {
          "A priori standard deviation of an image coordinate, px");
   r->AddChoice("tie_points",
                &tie_points,
-               ChoicesOf<TiePointSource>(TiePointSourceName,
-                                         {TiePointSource::kAuto,
-                                          TiePointSource::kAlsm,
-                                          TiePointSource::kModel,
-                                          TiePointSource::kBoth}),
+               TiePointSourceChoices(),
                "Tie observations: model (the model's tracks), alsm (bayon "
                "tiepoints' least-squares tie points), both; auto: both where "
                "the database has tie points, else model");

@@ -24,6 +24,7 @@
 #include <Eigen/Core>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace bayon {
@@ -40,6 +41,8 @@ enum class CameraModelChoice { kBrownBeyer, kColmap };
 enum class TiePointSource { kAuto, kModel, kAlsm, kBoth };
 // "auto", "model", "alsm" or "both".
 std::string TiePointSourceName(TiePointSource source);
+// Each source with its name, for the option that chooses one.
+std::vector<std::pair<std::string, TiePointSource>> TiePointSourceChoices();
 
 struct AdjustmentInputOptions {
   CameraModelChoice camera_model = CameraModelChoice::kBrownBeyer;

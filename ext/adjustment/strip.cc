@@ -1124,11 +1124,7 @@ void StripOptions::Register(OptionRegistry* r) {
   r->Add("image_sigma_px", &image_sigma_px, "Precision of a keypoint, px");
   r->AddChoice("tie_points",
                &tie_points,
-               ChoicesOf<TiePointSource>(TiePointSourceName,
-                                         {TiePointSource::kAuto,
-                                          TiePointSource::kAlsm,
-                                          TiePointSource::kModel,
-                                          TiePointSource::kBoth}),
+               TiePointSourceChoices(),
                "Tie observations: model (the tracks of the verified matches), "
                "alsm (bayon tiepoints' least-squares tie points), both; auto: "
                "both where the database has tie points");

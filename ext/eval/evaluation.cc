@@ -104,7 +104,7 @@ void CheckTruthCovers(const EvaluationOptions& options, const Truth& truth) {
   if (dense && !(CompletenessThreshold(options, truth) > 0)) {
     ThrowInputError(
         "no ground sampling distance known: give "
-        "--completeness_threshold_m or --gsd_m");
+        "completeness_threshold_m or gsd_m");
   }
   if (!options.textured_mesh_path.empty() &&
       (truth.heldout_path.empty() || truth.surface_path.empty())) {
@@ -509,6 +509,90 @@ Json EvaluateAgainstTruth(const EvaluationOptions& options, std::FILE* tables) {
 
 }  // namespace
 
+void EvaluationOptions::Register(OptionRegistry* r) {
+  r->Add("ground_truth_path",
+         &ground_truth_path,
+         "True model folder, or a synthetic workspace's gt/ folder "
+         "(required but for silhouettes)");
+  r->Add("input_path", &input_path, "Sparse model to evaluate");
+  r->Add("calibration_path",
+         &calibration_path,
+         "calibration.json of the model (default: the one beside it)");
+  r->Add("database_path",
+         &database_path,
+         "Database whose pair orientations (`bayon relative`) to "
+         "evaluate");
+  r->Add("adjacent_pairs",
+         &adjacent_pairs,
+         "With --database_path, 1: only neighbouring images in the "
+         "database's order, the last with the first (a ring)");
+  r->Add("cloud_path", &cloud_path, "Dense cloud (PLY) to evaluate");
+  r->Add("cloud_errors_path",
+         &cloud_errors_path,
+         "Write the cloud, in the truth's frame, with each point's "
+         "distance to the true surface (PLY attribute distance_m)");
+  r->Add("edit_input_path",
+         &edit_input_path,
+         "The cloud before `bayon edit`, with blunders flagged "
+         "(`bayon synth_cloud`); --cloud_path is the edited one: "
+         "blunders and good points removed, and the RMS of the "
+         "kept points against the blunder-free input's");
+  r->Add("off_surface_m",
+         &off_surface_m,
+         "With --edit_input_path: unflagged points farther than this "
+         "from the truth (the input's own blunders) are also counted "
+         "apart");
+  r->Add("mesh_path", &mesh_path, "Mesh (PLY) to evaluate");
+  r->Add("textured_mesh_path",
+         &textured_mesh_path,
+         "Textured model (PLY with texcoord and a TextureFile "
+         "comment, or per-vertex colours)");
+  r->Add("texture_path",
+         &texture_path,
+         "Its texture atlas (default: the PLY's TextureFile)");
+  r->Add("surface_path",
+         &surface_path,
+         "True surface (default: <ground truth>/surface.ply)");
+  r->Add("heldout_path",
+         &heldout_path,
+         "Held-out viewpoints (default: <ground truth>/heldout)");
+  r->Add(
+      "gsd_m", &gsd_m, "Ground sampling distance (default: from synth.json)");
+  r->Add("completeness_threshold_m",
+         &completeness_threshold_m,
+         "Distance within which the truth counts as reached; 0: "
+         "completeness_threshold_gsd GSDs");
+  r->Add("completeness_threshold_gsd",
+         &completeness_threshold_gsd,
+         "The same in GSDs");
+  r->Add(
+      "num_samples", &num_samples, "Samples of the true surface and of meshes");
+  r->Add("render_path",
+         &render_path,
+         "Write the renders of the texture evaluation here");
+  r->Add("silhouette_image_path",
+         &silhouette_image_path,
+         "Photographs of an object on a dark background: --mesh_path "
+         "carried into them through --input_path's cameras, its "
+         "silhouette's IoU with the object (no ground truth needed)");
+  r->Add("silhouette_threshold",
+         &silhouette.grey_threshold,
+         "Silhouettes: grey value above which a pixel is the object's");
+  r->Add("silhouette_mask_path",
+         &silhouette.mask_dir,
+         "Silhouettes: write the masks here (white both, red model "
+         "only, blue photograph only)");
+  r->Add("image_path",
+         &image_path,
+         "Photographs the textured model (--textured_mesh_path) was "
+         "not made from (leave one out): it is rendered through "
+         "their cameras (--input_path) and compared with them");
+  r->Add("image_names", &image_names, "Those photographs' names");
+  r->Add("align", &align, "1: fit a similarity first; 0: both share a datum");
+  r->Add("label", &label, "Name of the model in the tables");
+  r->Add("num_threads", &num_threads, "Threads (-1: all cores)");
+}
+
 void EvaluationOptions::Check() const {
   if (image_path.empty() && !image_names.empty()) {
     ThrowInputError(
@@ -555,7 +639,7 @@ void EvaluationOptions::Check() const {
     CheckFileExists(edit_input_path, "--edit_input_path");
   }
   if (!(off_surface_m >= 0)) {
-    ThrowInputError("--off_surface_m must be >= 0 (got ", off_surface_m, ")");
+    ThrowInputError("off_surface_m must be >= 0 (got ", off_surface_m, ")");
   }
 }
 

@@ -13,6 +13,7 @@
 // it was not made from (leave one out).
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/eval/silhouette_eval.h"
 
 #include <nlohmann/json.hpp>
@@ -74,6 +75,8 @@ struct EvaluationOptions {
   int num_threads = -1;
 
   // Refuses, with one line, what is missing or inconsistent.
+  // Every field, under `bayon evaluate`'s flags.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -32,19 +32,30 @@ const char* FeatureDetectorName(FeatureDetector detector) {
   return "?";
 }
 
-std::optional<FeatureDetector> FeatureDetectorFromName(
-    const std::string& name) {
-  for (FeatureDetector detector : {FeatureDetector::kMoravec,
-                                   FeatureDetector::kSift,
-                                   FeatureDetector::kBoth}) {
-    if (name == FeatureDetectorName(detector)) return detector;
-  }
-  return std::nullopt;
+void FeatureExtractionOptions::Register(OptionRegistry* r) {
+  r->AddChoice("detector",
+               &detector,
+               ChoicesOf<FeatureDetector>(
+                   [](FeatureDetector d) { return FeatureDetectorName(d); },
+                   {FeatureDetector::kMoravec,
+                    FeatureDetector::kSift,
+                    FeatureDetector::kBoth}),
+               "moravec, sift or both");
+  r->AddNested("moravec", &moravec);
+  r->AddNested("sift", &sift);
+  r->Add("overwrite",
+         &overwrite,
+         "1: replace existing keypoints (drops their matches)");
+  r->Add("targets_path",
+         &targets_path,
+         "Coded targets of `bayon targets`, appended as keypoints that match "
+         "pairs by name");
+  r->Add("num_threads", &num_threads, "Images in parallel (-1 = all)");
 }
 
 void FeatureExtractionOptions::Check() const {
-  if (detector != FeatureDetector::kSift) moravec.Check();
-  if (detector != FeatureDetector::kMoravec) sift.Check();
+  if (detector != FeatureDetector::kSift) CheckNested("moravec", moravec);
+  if (detector != FeatureDetector::kMoravec) CheckNested("sift", sift);
 }
 
 ImageFeatures DetectImageFeatures(const std::string& image_file,

@@ -28,8 +28,6 @@ namespace bayon {
 
 enum class FeatureDetector { kMoravec, kSift, kBoth };
 const char* FeatureDetectorName(FeatureDetector detector);
-// nullopt for an unknown name.
-std::optional<FeatureDetector> FeatureDetectorFromName(const std::string& name);
 
 struct FeatureExtractionOptions {
   FeatureDetector detector = FeatureDetector::kMoravec;
@@ -45,6 +43,8 @@ struct FeatureExtractionOptions {
   // name (bayon_keypoint_targets). Empty: none.
   std::string targets_path;
   int num_threads = -1;  // images in parallel; -1 = all cores
+  // Every field, the detectors' as moravec.* and sift.*.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

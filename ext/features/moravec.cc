@@ -11,26 +11,37 @@
 
 namespace bayon {
 
+void MoravecOptions::Register(OptionRegistry* r) {
+  r->Add("window_size", &window_size, "Operator window side, pixels (odd)");
+  r->Add("patch_size",
+         &patch_size,
+         "Thinning patch side, pixels; 0 = from max_num_features");
+  r->Add("min_interest",
+         &min_interest,
+         "Smallest interest value kept (squared grey values, 0..255)");
+  r->Add("max_num_features",
+         &max_num_features,
+         "At most this many points per image (0 = no limit)");
+  r->Add("border_px", &border_px, "No points this close to the border");
+}
+
 void MoravecOptions::Check() const {
   CheckOption(window_size >= 3 && window_size % 2 == 1,
-              "MoravecOptions.window_size",
+              "window_size",
               "odd and >= 3",
               window_size);
   CheckOption(patch_size == 0 || patch_size >= 2,
-              "MoravecOptions.patch_size",
+              "patch_size",
               "0 (automatic) or >= 2",
               patch_size);
+  CheckOption(min_interest >= 0, "min_interest", ">= 0", min_interest);
   CheckOption(
-      min_interest >= 0, "MoravecOptions.min_interest", ">= 0", min_interest);
-  CheckOption(max_num_features >= 0,
-              "MoravecOptions.max_num_features",
-              ">= 0",
-              max_num_features);
+      max_num_features >= 0, "max_num_features", ">= 0", max_num_features);
   CheckOption(patch_size > 0 || max_num_features > 0,
-              "MoravecOptions.patch_size",
+              "patch_size",
               "> 0 when max_num_features is 0 (no limit)",
               patch_size);
-  CheckOption(border_px >= 0, "MoravecOptions.border_px", ">= 0", border_px);
+  CheckOption(border_px >= 0, "border_px", ">= 0", border_px);
 }
 
 cv::Mat MoravecInterest(const cv::Mat& gray, int window_size) {

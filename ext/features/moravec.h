@@ -26,6 +26,8 @@
 // conjugate point to sub-pixel precision against the reference point anyway.
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
@@ -50,6 +52,7 @@ struct MoravecOptions {
   // Points closer than this to the image border are dropped, pixels: room
   // for the correlation windows of the matching stage.
   int border_px = 8;
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming field, value, rule
 };
 

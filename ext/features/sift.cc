@@ -12,25 +12,35 @@
 
 namespace bayon {
 
+void SiftOptions::Register(OptionRegistry* r) {
+  r->Add("max_num_features",
+         &max_num_features,
+         "At most this many keypoints per image, the strongest");
+  r->Add("contrast_threshold",
+         &contrast_threshold,
+         "Smallest DoG contrast kept (OpenCV's units)");
+  r->Add("edge_threshold",
+         &edge_threshold,
+         "Largest ratio of principal curvatures kept");
+  r->Add("max_image_size",
+         &max_image_size,
+         "Longer images are reduced to this first (0 = never)");
+}
+
 void SiftOptions::Check() const {
-  CheckOption(max_num_features >= 1,
-              "SiftOptions.max_num_features",
-              ">= 1",
-              max_num_features);
+  CheckOption(
+      max_num_features >= 1, "max_num_features", ">= 1", max_num_features);
   CheckOption(num_octave_layers >= 1 && num_octave_layers <= 8,
-              "SiftOptions.num_octave_layers",
+              "num_octave_layers",
               "in [1, 8]",
               num_octave_layers);
   CheckOption(contrast_threshold > 0 && contrast_threshold < 1,
-              "SiftOptions.contrast_threshold",
+              "contrast_threshold",
               "in (0, 1)",
               contrast_threshold);
-  CheckOption(edge_threshold >= 1,
-              "SiftOptions.edge_threshold",
-              ">= 1",
-              edge_threshold);
+  CheckOption(edge_threshold >= 1, "edge_threshold", ">= 1", edge_threshold);
   CheckOption(max_image_size == 0 || max_image_size >= 64,
-              "SiftOptions.max_image_size",
+              "max_image_size",
               "0 (never reduce) or >= 64",
               max_image_size);
 }

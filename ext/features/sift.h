@@ -22,6 +22,7 @@
 #pragma once
 
 #include "ext/colmap/database.h"
+#include "ext/core/option_registry.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -45,6 +46,8 @@ struct SiftOptions {
   // Images whose long side exceeds this are reduced before detection, as
   // COLMAP's max_image_size; 0 = never.
   int max_image_size = 3200;
+  // The fields `bayon features` offers.
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming field, value, rule
 };
 

@@ -14,16 +14,6 @@
 
 namespace bayon {
 
-std::optional<PairingMode> PairingModeFromName(const std::string& name) {
-  if (name == "ring") return PairingMode::kRing;
-  if (name == "sequential") return PairingMode::kSequential;
-  if (name == "exhaustive") return PairingMode::kExhaustive;
-  if (name == "list") return PairingMode::kList;
-  if (name == "retrieval") return PairingMode::kRetrieval;
-  if (name == "auto") return PairingMode::kAuto;
-  return std::nullopt;
-}
-
 void PairingOptions::Register(OptionRegistry* r) {
   r->AddChoice(
       "mode",

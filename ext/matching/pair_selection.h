@@ -29,9 +29,7 @@ enum class PairingMode {
   kAuto,        // exhaustive up to max_exhaustive_images, else retrieval
 };
 
-// "ring", "sequential", "exhaustive", "list", "retrieval", "auto"; nullopt
-// for other names.
-std::optional<PairingMode> PairingModeFromName(const std::string& name);
+// "ring", "sequential", "exhaustive", "list", "retrieval", "auto".
 const char* PairingModeName(PairingMode mode);
 
 struct PairingOptions {

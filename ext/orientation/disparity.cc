@@ -11,6 +11,7 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <iomanip>
 #include <map>
 #include <set>
@@ -18,7 +19,56 @@
 
 namespace bayon {
 
+void DisparityOptions::Register(OptionRegistry* r) {
+  r->Add("use_subpixel_points",
+         &use_subpixel_points,
+         "1: use bayon_matches' sub-pixel conjugate points");
+  surface.Register(r);
+  r->Add("overwrite",
+         &overwrite,
+         "1: fit pairs that have a current surface again");
+  r->Add("num_threads", &num_threads, "Threads (-1 = all cores)");
+}
+
 void DisparityOptions::Check() const { surface.Check(); }
+
+std::string DisparitySummaryLine(const DisparitySummary& summary) {
+  std::vector<double> bands, shares;
+  int64_t num_used = 0, num_blunders = 0;
+  for (const DisparityReport& report : summary.surfaces) {
+    if (!report.fitted) continue;
+    num_used += report.num_used;
+    num_blunders += report.num_blunders;
+    bands.push_back(report.median_band_px);
+    if (report.median_range_px > 0) {
+      shares.push_back(100 * report.median_band_px / report.median_range_px);
+    }
+  }
+  const auto median = [](std::vector<double> values) {
+    if (values.empty()) return 0.0;
+    std::nth_element(
+        values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  return StrCat(summary.num_fitted,
+                " surfaces fitted for ",
+                summary.num_pairs,
+                " oriented pairs (",
+                num_used,
+                " points used, ",
+                num_blunders,
+                " blunders; median band ",
+                median(bands),
+                " px, ",
+                median(shares),
+                " % of the epipolar line), ",
+                summary.num_failed,
+                " not fitted, ",
+                summary.num_skipped,
+                " skipped, ",
+                summary.seconds,
+                " s");
+}
 
 namespace {
 
@@ -148,6 +198,61 @@ void LogSurface(const DisparityReport& report) {
   LOG(INFO) << line.str();
 }
 
+struct OrientedPair {
+  image_t id1 = kInvalidImageId;
+  image_t id2 = kInvalidImageId;
+  PairOrientation orientation;
+};
+
+// The oriented pairs: bayon's orientations, and COLMAP's posed geometries,
+// each as it was oriented; InputError when there are none.
+std::vector<OrientedPair> OrientedPairs(
+    Database* database,
+    const std::map<image_t, const DatabaseImage*>& image_of,
+    const std::string& database_path) {
+  std::set<pair_t> pair_ids;
+  for (const auto& [pair_id, record] : ReadAllRelativeOrientations(database)) {
+    if (record.success) pair_ids.insert(pair_id);
+  }
+  for (const auto& [pair_id, geometry] : database->ReadAllTwoViewGeometries()) {
+    if (geometry.inlier_matches.rows() > 0 && geometry.qvec && geometry.tvec) {
+      pair_ids.insert(pair_id);
+    }
+  }
+  std::vector<OrientedPair> pairs;
+  for (pair_t pair_id : pair_ids) {
+    const auto [id1, id2] = ImageIdsFromPairId(pair_id);
+    if (!image_of.count(id1) || !image_of.count(id2)) continue;
+    if (!database->ExistsTwoViewGeometry(id1, id2)) continue;
+    const auto orientation = ReadPairOrientation(database, id1, id2);
+    if (!orientation) continue;
+    pairs.push_back({id1, id2, *orientation});
+  }
+  if (pairs.empty()) {
+    ThrowInputError(database_path,
+                    ": no oriented image pairs (two_view_geometries with a "
+                    "relative pose; run `bayon relative` first)");
+  }
+  return pairs;
+}
+
+// Each surface logged and counted.
+DisparitySummary Summarize(const std::vector<SurfaceJob>& jobs) {
+  DisparitySummary summary;
+  for (const SurfaceJob& job : jobs) {
+    LogSurface(job.report);
+    if (job.report.skipped) {
+      ++summary.num_skipped;
+    } else if (job.report.fitted) {
+      ++summary.num_fitted;
+    } else {
+      ++summary.num_failed;
+    }
+    summary.surfaces.push_back(job.report);
+  }
+  return summary;
+}
+
 }  // namespace
 
 DisparitySummary FitDisparitySurfaces(const std::string& database_path,
@@ -167,32 +272,8 @@ DisparitySummary FitDisparitySurfaces(const std::string& database_path,
   std::map<image_t, const DatabaseImage*> image_of;
   for (const DatabaseImage& image : images) image_of[image.image_id] = &image;
 
-  // The oriented pairs: bayon's orientations, and COLMAP's posed geometries.
-  std::set<pair_t> pair_ids;
-  for (const auto& [pair_id, record] : ReadAllRelativeOrientations(&database)) {
-    if (record.success) pair_ids.insert(pair_id);
-  }
-  for (const auto& [pair_id, geometry] : database.ReadAllTwoViewGeometries()) {
-    if (geometry.inlier_matches.rows() > 0 && geometry.qvec && geometry.tvec) {
-      pair_ids.insert(pair_id);
-    }
-  }
-  std::vector<std::pair<image_t, image_t>> pairs;
-  std::vector<PairOrientation> orientations;
-  for (pair_t pair_id : pair_ids) {
-    const auto [id1, id2] = ImageIdsFromPairId(pair_id);
-    if (!image_of.count(id1) || !image_of.count(id2)) continue;
-    if (!database.ExistsTwoViewGeometry(id1, id2)) continue;
-    const auto orientation = ReadPairOrientation(&database, id1, id2);
-    if (!orientation) continue;
-    pairs.emplace_back(id1, id2);
-    orientations.push_back(*orientation);
-  }
-  if (pairs.empty()) {
-    ThrowInputError(database_path,
-                    ": no oriented image pairs (two_view_geometries with a "
-                    "relative pose; run `bayon relative` first)");
-  }
+  const std::vector<OrientedPair> pairs =
+      OrientedPairs(&database, image_of, database_path);
 
   // Interior orientations, as each pair was oriented.
   std::map<std::pair<image_t, bool>, ImageVectors> vectors;
@@ -219,8 +300,8 @@ DisparitySummary FitDisparitySurfaces(const std::string& database_path,
 
   std::vector<SurfaceJob> jobs;
   for (size_t p = 0; p < pairs.size(); ++p) {
-    const auto [id1, id2] = pairs[p];
-    const PairOrientation& orientation = orientations[p];
+    const image_t id1 = pairs[p].id1, id2 = pairs[p].id2;
+    const PairOrientation& orientation = pairs[p].orientation;
     const bool zero = orientation.assume_zero_distortion;
     const ImageVectors& v1 = vectors_of(id1, zero);
     const ImageVectors& v2 = vectors_of(id2, zero);
@@ -300,19 +381,8 @@ DisparitySummary FitDisparitySurfaces(const std::string& database_path,
       });
   progress.Finish();
 
-  DisparitySummary summary;
+  DisparitySummary summary = Summarize(jobs);
   summary.num_pairs = static_cast<int>(pairs.size());
-  for (const SurfaceJob& job : jobs) {
-    LogSurface(job.report);
-    if (job.report.skipped) {
-      ++summary.num_skipped;
-    } else if (job.report.fitted) {
-      ++summary.num_fitted;
-    } else {
-      ++summary.num_failed;
-    }
-    summary.surfaces.push_back(job.report);
-  }
   summary.seconds = timer.Seconds();
   return summary;
 }

@@ -31,6 +31,8 @@ struct DisparityOptions {
   // Fit pairs again that have a current surface (or failure) already.
   bool overwrite = false;
   int num_threads = -1;  // pairs in parallel; -1 = all cores
+  // Every field, the surfaces' without a prefix.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -65,6 +67,9 @@ struct DisparitySummary {
   int num_skipped = 0;
   double seconds = 0;
 };
+
+// What was fitted, in one line: points used, blunders, the median band.
+std::string DisparitySummaryLine(const DisparitySummary& summary);
 
 // Fits the surfaces. Bad input throws InputError before anything is written
 // (no database, no images, no oriented pairs); a pair that cannot have a

@@ -19,6 +19,47 @@
 
 namespace bayon {
 
+void DisparitySurfaceOptions::Register(OptionRegistry* r) {
+  r->Add("points_per_cell",
+         &points_per_cell,
+         "Grid cell size: conjugate points per cell");
+  r->Add("cell_size_factors",
+         &cell_size_factors,
+         "Cell sizes tried by cross-validation (times the above)");
+  r->Add("max_cells", &max_cells, "Most cells along the longer image side");
+  r->Add("smoothness_candidates",
+         &smoothness_candidates,
+         "Smoothness weights tried by cross-validation");
+  r->Add("num_folds", &num_folds, "Cross-validation folds");
+  r->Add("blunder_threshold",
+         &blunder_threshold,
+         "Tukey constant / blunder limit, local robust sigmas");
+  r->Add("band_quantile",
+         &band_quantile,
+         "Share of cross-validated predictions the band holds");
+  r->Add("min_band_k", &min_band_k, "Smallest band half width, local sigmas");
+  r->Add("min_sigma_px", &min_sigma_px, "Smallest local sigma, pixels");
+  r->Add("depth_tolerance",
+         &depth_tolerance,
+         "Unsampled relief the band holds, share of the depth");
+  r->Add("range_neighbors",
+         &range_neighbors,
+         "Nearest points whose inverse depths the band holds");
+  r->Add("gradient_factor",
+         &gradient_factor,
+         "Band growth with disparity gradient times data distance");
+  r->Add("support_radius_spacings",
+         &support_radius_spacings,
+         "Supported within this many point spacings of the data");
+  r->Add("growth_px_per_px",
+         &growth_px_per_px,
+         "Band growth off the supported region, px per px");
+  r->Add("min_num_points",
+         &min_num_points,
+         "Pairs with fewer usable points get no surface");
+  r->Add("seed", &seed, "Seed of the cross-validation folds");
+}
+
 void DisparitySurfaceOptions::Check() const {
   CheckOption(points_per_cell > 0,
               "DisparitySurfaceOptions.points_per_cell",

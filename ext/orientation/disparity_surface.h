@@ -92,6 +92,7 @@
 
 #include "ext/colmap/database.h"
 #include "ext/colmap/table_disparity.h"
+#include "ext/core/option_registry.h"
 #include "ext/orientation/image_vectors.h"
 #include "ext/orientation/relative_orientation.h"
 
@@ -163,6 +164,7 @@ struct DisparitySurfaceOptions {
   // Fewer usable points than this: no surface.
   int min_num_points = 12;
   unsigned int seed = 1;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -11,6 +11,7 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <map>
@@ -19,6 +20,43 @@
 namespace fs = std::filesystem;
 
 namespace bayon {
+
+void InteriorOptions::Register(OptionRegistry* r) {
+  r->Add("film_scan",
+         &film_scan,
+         "1: scanned film frames (virtual fiducials); 0: digital");
+  fiducials.Register(r);
+  r->Add("overwrite", &overwrite, "1: replace existing bayon_interior rows");
+  r->Add("num_threads", &num_threads, "Images in parallel (-1 = all)");
+}
+
+std::string InteriorSummaryLine(const InteriorSummary& summary,
+                                const InteriorOptions& options) {
+  double sum_rms = 0, max_rotation = 0;
+  for (const ImageInteriorReport& image : summary.images) {
+    if (image.status != InteriorStatus::kDone || !options.film_scan) continue;
+    sum_rms += image.fiducials.rms_px;
+    max_rotation =
+        std::max(max_rotation, std::abs(image.fiducials.rotation_deg));
+  }
+  const std::string film = options.film_scan && summary.num_done > 0
+                               ? StrCat(" (mean edge RMS ",
+                                        sum_rms / summary.num_done,
+                                        " px, largest rotation ",
+                                        max_rotation,
+                                        " deg)")
+                               : "";
+  return StrCat(summary.num_done,
+                options.film_scan ? " film frames measured" : " digital frames",
+                film,
+                ", ",
+                summary.num_kept,
+                " kept, ",
+                summary.num_failed,
+                " failed, ",
+                summary.seconds,
+                " s");
+}
 
 void InteriorOptions::Check() const { fiducials.Check(); }
 

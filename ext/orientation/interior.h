@@ -42,6 +42,8 @@ struct InteriorOptions {
   // Replace existing bayon_interior rows; without it such images are kept.
   bool overwrite = false;
   int num_threads = -1;  // images in parallel; -1 = all cores
+  // Every field, the fiducials' without a prefix.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -80,6 +82,11 @@ InteriorRecord InteriorFromFiducials(const VirtualFiducialResult& result);
 // One log line for an image: edges, points, residuals, rotation, corner
 // angles, or the reason it failed or was kept.
 std::string DescribeInterior(const ImageInteriorReport& report);
+
+// What was measured, in one line (the film frames' mean edge RMS and
+// largest rotation).
+std::string InteriorSummaryLine(const InteriorSummary& summary,
+                                const InteriorOptions& options);
 
 // Runs over every image of the database (see the header comment).
 InteriorSummary OrientInteriors(const std::string& database_path,

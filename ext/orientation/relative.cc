@@ -19,6 +19,67 @@
 
 namespace bayon {
 
+void RelativeOptions::Register(OptionRegistry* r) {
+  r->Add("assume_zero_distortion",
+         &assume_zero_distortion,
+         "1: camera constant and principal point only (the paper's start)");
+  r->Add("use_subpixel_points",
+         &use_subpixel_points,
+         "1: use bayon_matches' sub-pixel conjugate points");
+  estimation.Register(r);
+  r->Add("overwrite",
+         &overwrite,
+         "1: orient pairs that were oriented before again");
+  r->Add("estimate_focal_length",
+         &estimate_focal_length,
+         "1: a camera without calibration or EXIF focal length gets one from "
+         "its strongest pairs before they are oriented");
+  r->Add("focal_max_num_pairs",
+         &focal_max_num_pairs,
+         "Pairs that estimate an unknown focal length");
+  r->Add("num_threads", &num_threads, "Threads (-1 = all cores)");
+}
+
+std::string RelativeSummaryLine(const RelativeSummary& summary) {
+  int64_t num_inliers = 0, num_blunders = 0;
+  double sum_sigma0 = 0;
+  for (const PairOrientationReport& pair : summary.pairs) {
+    if (!pair.oriented) continue;
+    num_inliers += pair.num_inliers;
+    num_blunders += pair.num_blunders;
+    sum_sigma0 += pair.sigma0_px;
+  }
+  std::string focal_lengths;
+  for (const FocalLengthReport& focal : summary.focal_lengths) {
+    focal_lengths += StrCat(
+        "camera ",
+        focal.camera_id,
+        focal.estimate.success
+            ? StrCat(": focal length ",
+                     focal.estimate.focal_length_px,
+                     " px +- ",
+                     100 * focal.estimate.relative_sigma,
+                     " % from the photographs; ")
+            : StrCat(": focal length unknown, ", focal.estimate.reason, "; "));
+  }
+  return StrCat(
+      focal_lengths,
+      summary.num_oriented,
+      " pairs oriented (",
+      num_inliers,
+      " inliers, ",
+      num_blunders,
+      " blunders, mean sigma0 ",
+      summary.num_oriented > 0 ? sum_sigma0 / summary.num_oriented : 0.0,
+      " px), ",
+      summary.num_failed,
+      " not oriented, ",
+      summary.num_skipped,
+      " skipped, ",
+      summary.seconds,
+      " s");
+}
+
 void RelativeOptions::Check() const {
   estimation.Check();
   focal.Check();

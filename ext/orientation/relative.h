@@ -53,6 +53,9 @@ struct RelativeOptions {
   int focal_max_num_pairs = 20;
   FocalLengthOptions focal;
   int num_threads = -1;  // pairs in parallel; -1 = all cores
+  // Every field but the focal length estimation's; the estimation's
+  // without a prefix.
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
@@ -115,6 +118,9 @@ ConjugatePoints PairConjugatePoints(const FeatureKeypoints& keypoints1,
 // pair that cannot be oriented is reported, the others are still done. If
 // none can be (photographs that do not overlap), InputError after them,
 // naming the pair with the most matches and what stopped it.
+// What was oriented, in one line, after the focal lengths estimated.
+std::string RelativeSummaryLine(const RelativeSummary& summary);
+
 RelativeSummary OrientImagePairs(const std::string& database_path,
                                  const RelativeOptions& options);
 

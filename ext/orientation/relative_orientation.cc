@@ -14,6 +14,28 @@
 
 namespace bayon {
 
+void RelativeOrientationOptions::Register(OptionRegistry* r) {
+  r->Add("num_samples", &num_samples, "LMedS random 8-point samples (m)");
+  r->Add("blunder_threshold",
+         &blunder_threshold,
+         "Blunder threshold, robust sigmas");
+  r->AddChoice("residual",
+               &residual,
+               {{"sampson", DrtResidual::kSampson},
+                {"algebraic", DrtResidual::kAlgebraic}},
+               "sampson or algebraic (eq. 2)");
+  r->Add("min_num_inliers",
+         &min_num_inliers,
+         "Pairs with fewer inliers are not oriented");
+  r->Add("max_sigma_px",
+         &max_sigma_px,
+         "Robust sigma above this: no epipolar geometry, pixels");
+  r->Add("min_parallax_px",
+         &min_parallax_px,
+         "A rotation alone fitting this well: no base, pixels");
+  r->Add("seed", &seed, "Random seed of the samples");
+}
+
 void RelativeOrientationOptions::Check() const {
   CheckOption(num_samples >= 1,
               "RelativeOrientationOptions.num_samples",

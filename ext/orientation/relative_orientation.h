@@ -87,6 +87,7 @@
 // rotations).
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/rigid3.h"
 
 #include <Eigen/Core>
@@ -157,6 +158,7 @@ struct RelativeOrientationOptions {
   double min_parallax_px = 1.5;
   double min_parallax_sigma0 = 3.0;
   unsigned int seed = 1;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 

@@ -16,6 +16,55 @@
 
 namespace bayon {
 
+void VirtualFiducialOptions::Register(OptionRegistry* r) {
+  r->Add(
+      "frame_width_mm", &frame_width_mm, "Nominal frame width (film gate), mm");
+  r->Add("frame_height_mm", &frame_height_mm, "Nominal frame height, mm");
+  r->Add("scan_resolution_um",
+         &scan_resolution_um,
+         "Scanner pixel size, um: fixes the scale (the frame size "
+         "is then a check); 0: scale from the nominal frame size "
+         "(affine)");
+  r->Add("decode_srgb",
+         &decode_srgb,
+         "1: decode the sRGB curve before measuring; 0: values are "
+         "linear");
+  r->Add("search_fraction",
+         &search_fraction,
+         "How far into the scan each edge is searched (fraction of "
+         "its width or height)");
+  r->Add("min_contrast",
+         &min_contrast,
+         "Smallest step from the border to the photograph (linear "
+         "intensity, 0..1)");
+  r->Add("edge_half_width_px",
+         &edge_half_width_px,
+         "Half width of the edge window, pixels (covers the blur)");
+  r->Add("min_edge_points",
+         &min_edge_points,
+         "Fewest points on an accepted edge line");
+  r->Add("corner_margin_px",
+         &corner_margin_px,
+         "Edge points this close to a corner are left out, pixels");
+  r->Add("max_rms_px",
+         &max_rms_px,
+         "Largest residual RMS of an accepted edge, pixels");
+  r->Add("max_rotation_deg",
+         &max_rotation_deg,
+         "Largest rotation of the frame in the scan, degrees");
+  r->Add("max_corner_angle_deviation_deg",
+         &max_corner_angle_deviation_deg,
+         "Largest deviation of a corner angle from 90 degrees");
+  r->Add("max_pixel_aspect_deviation",
+         &max_pixel_aspect_deviation,
+         "Without a scan resolution: largest relative difference of "
+         "the x and y pixel sizes");
+  r->Add("max_frame_size_deviation_mm",
+         &max_frame_size_deviation_mm,
+         "With a scan resolution: largest difference of a measured "
+         "side from the nominal frame size, mm");
+}
+
 void VirtualFiducialOptions::Check() const {
   CheckOption(frame_width_mm > 0,
               "VirtualFiducialOptions.frame_width_mm",

@@ -74,6 +74,7 @@
 #pragma once
 
 #include "ext/core/image_frame.h"
+#include "ext/core/option_registry.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -153,6 +154,7 @@ struct VirtualFiducialOptions {
   // from the nominal frame size, mm.
   double max_frame_size_deviation_mm = 0.5;
   uint32_t seed = 1;
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming field, value and rule
 };
 
