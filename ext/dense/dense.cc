@@ -357,7 +357,7 @@ std::vector<MasterSelection> SelectMasters(const Scene& scene,
       const Image* image = scene.FindImageByName(name);
       if (image == nullptr) {
         ThrowInputError(
-            "--master_names: the model has no image named '", name, "'");
+            "master_names: the model has no image named '", name, "'");
       }
       masters.push_back(static_cast<int>(
           std::find(ids.begin(), ids.end(), image->image_id) - ids.begin()));
@@ -540,8 +540,8 @@ class SparseDepths {
       ThrowInputError("master image ",
                       master.name,
                       ": fewer than 10 sparse points of the model lie in it, "
-                      "so its depth range is unknown (give --min_depth and "
-                      "--max_depth)");
+                      "so its depth range is unknown (give min_depth and "
+                      "max_depth)");
     } else {
       const double low = Quantile(depths_, 0.02);
       const double high = Quantile(depths_, 0.98);

@@ -138,7 +138,7 @@ void MultiViewReconstruction::PlanMasters() {
     if (selection.search.empty()) {
       state.skipped = StrCat(
           "no other image sees what it looks at from between "
-          "--min_triangulation_angle_deg and --max_search_angle_deg (",
+          "min_triangulation_angle_deg and max_search_angle_deg (",
           options_.min_triangulation_angle_deg,
           " to ",
           options_.max_search_angle_deg,
@@ -485,7 +485,7 @@ std::vector<MasterSelection> SelectMultiViewMasters(
       const Image* image = scene.FindImageByName(name);
       if (image == nullptr) {
         ThrowInputError(
-            "--master_names: the model has no image named '", name, "'");
+            "master_names: the model has no image named '", name, "'");
       }
       masters.push_back(image->image_id);
     }

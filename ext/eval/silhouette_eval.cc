@@ -17,7 +17,7 @@ namespace bayon {
 
 void SilhouetteOptions::Check() const {
   CheckOption(grey_threshold >= 0 && grey_threshold < 255,
-              "--silhouette_threshold",
+              "silhouette_threshold",
               "in [0, 255)",
               grey_threshold);
   CheckOption(min_coverage > 0 && min_coverage <= 1,

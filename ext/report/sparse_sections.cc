@@ -985,6 +985,49 @@ std::string RaysText(const Json& rays) {
 
 }  // namespace
 
+namespace {
+
+// The variance components of adjustment.json's statistics, as a table;
+// empty where none were estimated.
+std::string VarianceComponentsHtml(const Json& components) {
+  if (!components.is_array() || components.empty()) return std::string();
+  HtmlTable vc({"Observation group",
+                "Observations",
+                "Redundancy",
+                "Variance scale",
+                "Median &sigma; [px]"},
+               "lrrrr");
+  for (const Json& c : components) {
+    vc.AddRow({HtmlEscape(String(c, "group")),
+               CountOf(c, "num_observations"),
+               FormatFixed(Number(c, "redundancy"), 1),
+               FormatFixed(Number(c, "variance_scale"), 4),
+               FormatFixed(Number(c, "median_sigma_px"), 4)});
+  }
+  return "<h3>Variance components</h3>" + vc.Html();
+}
+
+// Each check point's difference and standard deviation, folded away; empty
+// without check points.
+std::string CheckPointsHtml(const Json& checks) {
+  if (Integer(checks, "num") <= 0) return std::string();
+  HtmlTable list({"Check point", "dX", "dY", "dZ", "sX", "sY", "sZ", "Rays"},
+                 "lrrrrrrr");
+  for (const Json& p : Child(checks, "points")) {
+    const Json& d = Child(p, "difference_mm");
+    const Json& sd = Child(p, "std_dev_mm");
+    std::vector<std::string> row = {HtmlEscape(String(p, "name"))};
+    for (int k = 0; k < 3; ++k) row.push_back(FormatFixed(NumberAt(d, k), 2));
+    for (int k = 0; k < 3; ++k) row.push_back(FormatFixed(NumberAt(sd, k), 2));
+    row.push_back(CountOf(p, "rays"));
+    list.AddRow(row);
+  }
+  return "<details><summary>Check points (mm)</summary>" + list.Html() +
+         "</details>\n";
+}
+
+}  // namespace
+
 Section PrecisionSection(const Workspace& ws, Page* page) {
   Section section{"precision", "Precision of the bundle adjustment"};
   const std::string status =
@@ -1103,39 +1146,8 @@ Section PrecisionSection(const Workspace& ws, Page* page) {
         "prints them as mm). The paper's figures are in millimetres on the "
         "object, from 7 control points.</small>");
   }
-  const Json& components = Child(s, "variance_components");
-  if (components.is_array() && !components.empty()) {
-    HtmlTable vc({"Observation group",
-                  "Observations",
-                  "Redundancy",
-                  "Variance scale",
-                  "Median &sigma; [px]"},
-                 "lrrrr");
-    for (const Json& c : components) {
-      vc.AddRow({HtmlEscape(String(c, "group")),
-                 CountOf(c, "num_observations"),
-                 FormatFixed(Number(c, "redundancy"), 1),
-                 FormatFixed(Number(c, "variance_scale"), 4),
-                 FormatFixed(Number(c, "median_sigma_px"), 4)});
-    }
-    section.html += "<h3>Variance components</h3>" + vc.Html();
-  }
-  if (Integer(checks, "num") > 0) {
-    HtmlTable list({"Check point", "dX", "dY", "dZ", "sX", "sY", "sZ", "Rays"},
-                   "lrrrrrrr");
-    for (const Json& p : Child(checks, "points")) {
-      const Json& d = Child(p, "difference_mm");
-      const Json& sd = Child(p, "std_dev_mm");
-      std::vector<std::string> row = {HtmlEscape(String(p, "name"))};
-      for (int k = 0; k < 3; ++k) row.push_back(FormatFixed(NumberAt(d, k), 2));
-      for (int k = 0; k < 3; ++k)
-        row.push_back(FormatFixed(NumberAt(sd, k), 2));
-      row.push_back(CountOf(p, "rays"));
-      list.AddRow(row);
-    }
-    section.html += "<details><summary>Check points (mm)</summary>" +
-                    list.Html() + "</details>\n";
-  }
+  section.html += VarianceComponentsHtml(Child(s, "variance_components"));
+  section.html += CheckPointsHtml(checks);
   return section;
 }
 

@@ -239,6 +239,37 @@ void SeamLevelingOptions::Check() const {
       samples_per_edge >= 1, "samples_per_edge", ">= 1", samples_per_edge);
 }
 
+namespace {
+
+// The adjustments of the normal equations, by conjugate gradients (the
+// system is a graph Laplacian plus the border terms: large, sparse, well
+// enough conditioned by the regularisation).
+Eigen::MatrixXd SolveLevelling(const Eigen::SparseMatrix<double>& normal,
+                               const Eigen::MatrixXd& rhs,
+                               SeamLevelingReport* report) {
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>,
+                           Eigen::Lower | Eigen::Upper>
+      solver;
+  solver.setMaxIterations(1000);
+  solver.setTolerance(1e-4);
+  solver.compute(normal);
+  Eigen::MatrixXd g(rhs.rows(), 3);
+  for (int c = 0; c < 3; ++c) {
+    g.col(c) = solver.solve(rhs.col(c));
+    report->solver_iterations = std::max(report->solver_iterations,
+                                         static_cast<int>(solver.iterations()));
+    report->solver_error = std::max(report->solver_error, solver.error());
+  }
+  if (solver.info() != Eigen::Success) {
+    LOG(WARNING) << "seam levelling: conjugate gradients stopped after "
+                 << report->solver_iterations << " iterations at relative "
+                 << "residual " << report->solver_error;
+  }
+  return g;
+}
+
+}  // namespace
+
 std::vector<std::array<Eigen::Vector3f, 3>> LevelSeams(
     const TriangleMesh& mesh,
     const std::vector<int>& chart,
@@ -356,26 +387,7 @@ std::vector<std::array<Eigen::Vector3f, 3>> LevelSeams(
   triplets.clear();
   triplets.shrink_to_fit();
 
-  // Conjugate gradients (the system is a graph Laplacian plus the border
-  // terms: large, sparse, well enough conditioned by the regularisation).
-  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>,
-                           Eigen::Lower | Eigen::Upper>
-      solver;
-  solver.setMaxIterations(1000);
-  solver.setTolerance(1e-4);
-  solver.compute(normal);
-  Eigen::MatrixXd g(n, 3);
-  for (int c = 0; c < 3; ++c) {
-    g.col(c) = solver.solve(rhs.col(c));
-    report->solver_iterations = std::max(report->solver_iterations,
-                                         static_cast<int>(solver.iterations()));
-    report->solver_error = std::max(report->solver_error, solver.error());
-  }
-  if (solver.info() != Eigen::Success) {
-    LOG(WARNING) << "seam levelling: conjugate gradients stopped after "
-                 << report->solver_iterations << " iterations at relative "
-                 << "residual " << report->solver_error;
-  }
+  const Eigen::MatrixXd g = SolveLevelling(normal, rhs, report);
 
   double before = 0, after = 0;
   for (const Sample& s : samples) {

@@ -559,7 +559,7 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
   options.Check();
   for (const std::string& name : options.exclude_images) {
     if (scene.FindImageByName(name) == nullptr) {
-      ThrowInputError("--exclude_images: the model has no image '", name, "'");
+      ThrowInputError("exclude_images: the model has no image '", name, "'");
     }
   }
   std::vector<TextureImage> images;
@@ -585,7 +585,7 @@ std::vector<TextureImage> LoadTextureImages(const Scene& scene,
   if (images.empty()) {
     ThrowInputError(options.exclude_images.empty()
                         ? "the model has no images"
-                        : "--exclude_images leaves no image");
+                        : "exclude_images leaves no image");
   }
   Progress progress("loading", images.size(), "images");
   ParallelFor(static_cast<int>(images.size()), options.num_threads, [&](int i) {
@@ -838,8 +838,8 @@ cv::Size PackAtlas(const std::vector<std::array<Eigen::Vector2d, 3>>& corners,
                       pad,
                       " around each of ",
                       charts.size(),
-                      " charts (raise --max_atlas_size or lower "
-                      "--chart_merge_ratio)");
+                      " charts (raise max_atlas_size or lower "
+                      "chart_merge_ratio)");
     }
     // Chart sides in doubles first: a tiny --texel_size must not overflow.
     double largest_side = 0;
