@@ -381,7 +381,7 @@ void ExpectBadInputRefused(const std::string& mode) {
   std::vector<std::string> bare(args.begin(), args.begin() + 7);
   bare[4] = ws + "/bare";
   bare.insert(bare.end(), {"--mode", mode});
-  ExpectRefused(ws, bare, "--min_depth");
+  ExpectRefused(ws, bare, "give min_depth and max_depth");
 
   // A model without calibration: a camera with no focal length, and no
   // calibration.json beside it.

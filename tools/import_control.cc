@@ -44,19 +44,9 @@ int RunImportControl(int argc, char** argv) {
       "points subtracted; writes points.txt, observations.txt and crs.json "
       "(the CRS and the origin) into --output_path, a workspace's control/.");
   CLI::App& app = command.app();
-  app.add_option("--format", options.format, "odm, metashape or csv");
+  command.AddOptions(&options);
   app.add_option("--input_path", input_path, "The survey's file");
   app.add_option("--output_path", output_path, "Control folder to write");
-  app.add_option("--crs",
-                 options.crs,
-                 "The coordinates' CRS (EPSG:xxxx, a PROJ string); csv and "
-                 "metashape need it, for odm it replaces the file's");
-  app.add_option("--sigma_m",
-                 options.sigma_m,
-                 "Standard deviation of coordinates that state none, m");
-  app.add_option("--check_names",
-                 options.check_names,
-                 "Points that are check points (comma-separated)");
   app.add_option("--image_path",
                  image_path,
                  "Folder of the photographs: every measurement's must be "

@@ -25,23 +25,10 @@ int RunImportGroundTruth(int argc, char** argv) {
                  "Middlebury: the *_par.txt file; Strecha: the folder of "
                  "*.camera files (or one file)")
       ->required();
-  app.add_option("--image_path",
-                 options.image_path,
-                 "Image folder: every listed image must be there (default: "
-                 "Middlebury the folder of its file, Strecha unchecked)");
+  command.AddOptions(&options);
   app.add_option("--output_path", output_path, "Model folder to create")
       ->required();
   app.add_option("--overwrite", overwrite, "Replace an existing model folder");
-  app.add_option("--max_rotation_error",
-                 options.max_rotation_error,
-                 "Largest entry of |R^T R - I| accepted as a rotation");
-  app.add_option("--max_skew_px",
-                 options.max_skew_px,
-                 "Largest skew k12 (pixels) taken as zero; more is refused");
-  app.add_option("--pixel_origin_offset_px",
-                 options.pixel_origin_offset_px,
-                 "Added to the principal point: 0.5 when the file's upper-left "
-                 "pixel centre is (0, 0), 0 when it is COLMAP's (0.5, 0.5)");
   app.add_option("--log_path", log_path, "Append the log to this file");
   if (!command.Parse(argc, argv)) return 0;
   const auto format = GroundTruthFormatFromName(format_name);

@@ -40,16 +40,7 @@ int RunReport(int argc, char** argv) {
   app.add_option("--output_path",
                  output_path,
                  "The page (default <workspace>/report.html)");
-  app.add_option("--title",
-                 options.title,
-                 "Page title (default: bayon report: <workspace name>)");
-  app.add_option("--max_render_size_px",
-                 options.max_render_size_px,
-                 "Longest side of the embedded renders, pixels");
-  app.add_option("--max_renders", options.max_renders, "Renders embedded");
-  app.add_option("--max_plot_points",
-                 options.max_plot_points,
-                 "Sparse points drawn in the plan and side views");
+  command.AddOptions(&options);
   app.add_option("--overwrite", overwrite, "Replace an existing page");
   if (!command.Parse(argc, argv)) return 0;
 

@@ -34,26 +34,7 @@ int RunTargets(int argc, char** argv) {
   app.add_option("--output_path",
                  output_path,
                  "Measurements (control/observations.txt format)");
-  app.add_option("--dictionary",
-                 options.dictionary,
-                 "aruco_4x4_50, aruco_5x5_100, aruco_6x6_250 or "
-                 "apriltag_36h11");
-  app.add_option(
-      "--name_prefix", options.name_prefix, "Names are this and the code");
-  app.add_option("--min_side_px",
-                 options.min_side_px,
-                 "Markers with shorter sides are not looked for, px");
-  app.add_option("--edge_search_px",
-                 options.edge_search_px,
-                 "How far across a side its edge is looked for, px");
-  app.add_option("--max_line_sigma_px",
-                 options.max_line_sigma_px,
-                 "A side whose edge points scatter more is no measurement, "
-                 "px");
-  app.add_option("--edge_bias_px",
-                 options.edge_bias_px,
-                 "A side's error that its points' scatter does not show, "
-                 "added to each line's sigma, px");
+  command.AddOptions(&options);
   app.add_option("--print",
                  print_path,
                  "Write a printable sheet (SVG, A4) of --codes instead");

@@ -303,20 +303,37 @@ const char* GroundTruthFormatName(GroundTruthFormat format) {
   return format == GroundTruthFormat::kMiddlebury ? "middlebury" : "strecha";
 }
 
+void GroundTruthImportOptions::Register(OptionRegistry* r) {
+  r->Add("image_path",
+         &image_path,
+         "Image folder: every listed image must be there (default: "
+         "Middlebury the folder of its file, Strecha unchecked)");
+  r->Add("max_rotation_error",
+         &max_rotation_error,
+         "Largest entry of |R^T R - I| accepted as a rotation");
+  r->Add("max_skew_px",
+         &max_skew_px,
+         "Largest skew k12 (pixels) taken as zero; more is refused");
+  r->Add("pixel_origin_offset_px",
+         &pixel_origin_offset_px,
+         "Added to the principal point: 0.5 when the file's upper-left "
+         "pixel centre is (0, 0), 0 when it is COLMAP's (0.5, 0.5)");
+}
+
 void GroundTruthImportOptions::Check() const {
   if (input_path.empty()) {
-    ThrowInputError("GroundTruthImportOptions.input_path must be given");
+    ThrowInputError("input_path must be given");
   }
   CheckOption(max_rotation_error > 0 && max_rotation_error < 1,
-              "GroundTruthImportOptions.max_rotation_error",
+              "max_rotation_error",
               "in (0, 1)",
               max_rotation_error);
   CheckOption(max_skew_px >= 0 && std::isfinite(max_skew_px),
-              "GroundTruthImportOptions.max_skew_px",
+              "max_skew_px",
               ">= 0",
               max_skew_px);
   CheckOption(std::isfinite(pixel_origin_offset_px),
-              "GroundTruthImportOptions.pixel_origin_offset_px",
+              "pixel_origin_offset_px",
               "finite",
               pixel_origin_offset_px);
 }

@@ -33,6 +33,7 @@
 // an InputError "<file>:<line>: <what was found and what was expected>".
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/rigid3.h"
 #include "ext/core/scene.h"
 
@@ -71,6 +72,7 @@ struct GroundTruthImportOptions {
   // centre is (0, 0), 0 for files already in COLMAP's convention.
   double pixel_origin_offset_px = 0.5;
 
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming the field
 };
 

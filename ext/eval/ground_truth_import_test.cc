@@ -376,7 +376,7 @@ TEST(GroundTruthImport, OptionsAreChecked) {
   options.input_path = "x";
   options.max_rotation_error = 0;
   ExpectRefused([&] { options.Check(); },
-                {"GroundTruthImportOptions.max_rotation_error must be in "
+                {"max_rotation_error must be in "
                  "(0, 1) (got 0)"});
   EXPECT_EQ(GroundTruthFormatFromName("strecha"), GroundTruthFormat::kStrecha);
   EXPECT_FALSE(GroundTruthFormatFromName("bundler").has_value());

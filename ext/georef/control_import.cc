@@ -259,16 +259,30 @@ void CheckImages(const std::string& path,
 
 }  // namespace
 
+void ControlImportOptions::Register(OptionRegistry* r) {
+  r->Add("format", &format, "odm, metashape or csv");
+  r->Add("crs",
+         &crs,
+         "The coordinates' CRS (EPSG:xxxx, a PROJ string); csv and "
+         "metashape need it, for odm it replaces the file's");
+  r->Add("sigma_m",
+         &sigma_m,
+         "Standard deviation of coordinates that state none, m");
+  r->Add("check_names",
+         &check_names,
+         "Points that are check points (comma-separated)");
+}
+
 void ControlImportOptions::Check() const {
   CheckOption(format == "odm" || format == "metashape" || format == "csv",
-              "ControlImportOptions.format",
+              "format",
               "odm, metashape or csv",
               format);
   CheckOption(format == "odm" || !crs.empty(),
-              "ControlImportOptions.crs",
+              "crs",
               "given for csv and metashape (EPSG:xxxx)",
               crs);
-  CheckOption(sigma_m >= 0, "ControlImportOptions.sigma_m", ">= 0", sigma_m);
+  CheckOption(sigma_m >= 0, "sigma_m", ">= 0", sigma_m);
 }
 
 ImportedControl ImportControl(const std::string& path,

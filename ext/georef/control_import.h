@@ -18,6 +18,7 @@
 #pragma once
 
 #include "ext/colmap/control_io.h"
+#include "ext/core/option_registry.h"
 #include "ext/georef/crs.h"
 
 #include <string>
@@ -34,6 +35,7 @@ struct ControlImportOptions {
   double sigma_m = 0.01;
   // Points that are check points, not control (comma-separated names).
   std::string check_names;
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming field, value, rule
 };
 

@@ -161,31 +161,34 @@ std::string TableOfContents(const std::vector<Section>& sections) {
 
 }  // namespace
 
+void WorkspaceReportOptions::Register(OptionRegistry* r) {
+  r->Add(
+      "title", &title, "Page title (default: bayon report: <workspace name>)");
+  r->Add("max_render_size_px",
+         &max_render_size_px,
+         "Longest side of the embedded renders, pixels");
+  r->Add("max_renders", &max_renders, "Renders embedded");
+  r->Add("max_plot_points",
+         &max_plot_points,
+         "Sparse points drawn in the plan and side views");
+}
+
 void WorkspaceReportOptions::Check() const {
   CheckOption(max_render_size_px >= 64,
-              "WorkspaceReportOptions.max_render_size_px",
+              "max_render_size_px",
               ">= 64",
               max_render_size_px);
   CheckOption(jpeg_quality >= 10 && jpeg_quality <= 100,
-              "WorkspaceReportOptions.jpeg_quality",
+              "jpeg_quality",
               "in [10, 100]",
               jpeg_quality);
-  CheckOption(max_renders >= 0,
-              "WorkspaceReportOptions.max_renders",
-              ">= 0",
-              max_renders);
-  CheckOption(max_plot_points >= 1,
-              "WorkspaceReportOptions.max_plot_points",
-              ">= 1",
-              max_plot_points);
-  CheckOption(max_frame_points >= 1,
-              "WorkspaceReportOptions.max_frame_points",
-              ">= 1",
-              max_frame_points);
+  CheckOption(max_renders >= 0, "max_renders", ">= 0", max_renders);
+  CheckOption(max_plot_points >= 1, "max_plot_points", ">= 1", max_plot_points);
   CheckOption(
-      max_frames >= 1, "WorkspaceReportOptions.max_frames", ">= 1", max_frames);
+      max_frame_points >= 1, "max_frame_points", ">= 1", max_frame_points);
+  CheckOption(max_frames >= 1, "max_frames", ">= 1", max_frames);
   CheckOption(residual_grid_cells >= 2 && residual_grid_cells <= 50,
-              "WorkspaceReportOptions.residual_grid_cells",
+              "residual_grid_cells",
               "in [2, 50]",
               residual_grid_cells);
 }

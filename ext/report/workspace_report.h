@@ -31,6 +31,8 @@
 // says).
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <string>
 #include <vector>
 
@@ -59,6 +61,7 @@ struct WorkspaceReportOptions {
   // image errors).
   int residual_grid_cells = 8;
 
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming field, value and rule
 };
 

@@ -306,22 +306,35 @@ bool MeasureTarget(const cv::Mat& grey,
 
 }  // namespace
 
+void CodedTargetOptions::Register(OptionRegistry* r) {
+  r->Add("dictionary",
+         &dictionary,
+         "aruco_4x4_50, aruco_5x5_100, aruco_6x6_250 or "
+         "apriltag_36h11");
+  r->Add("name_prefix", &name_prefix, "Names are this and the code");
+  r->Add("min_side_px",
+         &min_side_px,
+         "Markers with shorter sides are not looked for, px");
+  r->Add("edge_search_px",
+         &edge_search_px,
+         "How far across a side its edge is looked for, px");
+  r->Add("max_line_sigma_px",
+         &max_line_sigma_px,
+         "A side whose edge points scatter more is no measurement, "
+         "px");
+  r->Add("edge_bias_px",
+         &edge_bias_px,
+         "A side's error that its points' scatter does not show, "
+         "added to each line's sigma, px");
+}
+
 void CodedTargetOptions::Check() const {
   FindDictionary(dictionary);
+  CheckOption(min_side_px >= 8, "min_side_px", ">= 8", min_side_px);
+  CheckOption(edge_search_px >= 1, "edge_search_px", ">= 1", edge_search_px);
+  CheckOption(edge_bias_px >= 0, "edge_bias_px", ">= 0", edge_bias_px);
   CheckOption(
-      min_side_px >= 8, "CodedTargetOptions.min_side_px", ">= 8", min_side_px);
-  CheckOption(edge_search_px >= 1,
-              "CodedTargetOptions.edge_search_px",
-              ">= 1",
-              edge_search_px);
-  CheckOption(edge_bias_px >= 0,
-              "CodedTargetOptions.edge_bias_px",
-              ">= 0",
-              edge_bias_px);
-  CheckOption(max_line_sigma_px > 0,
-              "CodedTargetOptions.max_line_sigma_px",
-              "> 0",
-              max_line_sigma_px);
+      max_line_sigma_px > 0, "max_line_sigma_px", "> 0", max_line_sigma_px);
 }
 
 int CodedTargetDictionarySize(const std::string& dictionary) {

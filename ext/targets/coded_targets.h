@@ -34,6 +34,8 @@
 // (0.5, 0.5).
 #pragma once
 
+#include "ext/core/option_registry.h"
+
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
@@ -64,6 +66,7 @@ struct CodedTargetOptions {
   // (radial RMS) from the truth at 3 x 3 samples per pixel and 0.056 px at
   // 8 x 8, where the scatter alone states about 0.01 px.
   double edge_bias_px = 0.04;
+  void Register(OptionRegistry* registry);
   void Check() const;  // throws InputError naming field, value, rule
 };
 
