@@ -37,21 +37,7 @@ int RunSynthCloud(int argc, char** argv) {
   app.add_option("--output_path", output_path, "Cloud to write (PLY)")
       ->required();
   app.add_option("--truth_path", truth_path, "Also write the true surface");
-  app.add_option("--num_points", options.num_points, "Points to sample");
-  app.add_option("--sigma_m",
-                 options.sigma_m,
-                 "Mean standard deviation per coordinate, metres");
-  app.add_option("--sigma_spread",
-                 options.sigma_spread,
-                 "Per-point sigmas spread +- this fraction around sigma_m");
-  app.add_option("--blunder_fraction",
-                 options.blunder_fraction,
-                 "Share of points displaced along the normal");
-  app.add_option("--blunder_min_m", options.blunder_min_m, "Smallest offset");
-  app.add_option("--blunder_max_m", options.blunder_max_m, "Largest offset");
-  app.add_option("--with_normals", options.with_normals, "1: true normals");
-  app.add_option("--with_sigmas", options.with_sigmas, "1: sx, sy, sz");
-  app.add_option("--seed", options.seed, "Random seed");
+  command.AddOptions(&options);
   app.add_option("--relief_m",
                  cylinder.relief_m,
                  "relief_cylinder: relief amplitude, metres");

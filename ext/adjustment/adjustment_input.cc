@@ -308,8 +308,8 @@ AdjustmentInput LoadAdjustmentInput(const std::string& database_path,
                                     const std::string& control_path,
                                     const AdjustmentInputOptions& options) {
   options.Check();
-  CheckFileExists(database_path, "--database_path");
-  CheckDirectoryExists(input_path, "--input_path");
+  CheckFileExists(database_path, "database_path");
+  CheckDirectoryExists(input_path, "input_path");
   AdjustmentInput input;
   input.scene = ReadModel(input_path);
   Scene& scene = input.scene;

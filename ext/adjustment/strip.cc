@@ -96,7 +96,7 @@ class StripBuilder {
  private:
   // ---------------------------------------------------------------- input
   void LoadImagesAndCameras(ControlData* control) {
-    CheckFileExists(database_path_, "--database_path");
+    CheckFileExists(database_path_, "database_path");
     Database database(database_path_, Database::Mode::kReadOnly);
     std::vector<DatabaseImage> rows = database.ReadAllImages();
     if (rows.size() < 2) {

@@ -103,23 +103,44 @@ void OptionRegistry::Add(const std::string& name,
   AddText(name, text, help);
 }
 
-void OptionRegistry::Add(const std::string& name,
-                         unsigned int* value,
-                         const std::string& help) {
-  Text text;
-  text.get = [value] { return std::to_string(*value); };
-  text.set = [value](const std::string& given) {
+namespace {
+
+// A whole number >= 0 that fits into Unsigned, as text.
+template <typename Unsigned>
+std::function<void(const std::string&)> SetUnsigned(Unsigned* value) {
+  return [value](const std::string& given) {
     const std::string item = Trimmed(given);
     char* rest = nullptr;
     errno = 0;
-    const unsigned long number = std::strtoul(item.c_str(), &rest, 10);
+    const unsigned long long number = std::strtoull(item.c_str(), &rest, 10);
     if (item.empty() || item[0] == '-' || *rest != '\0' || errno == ERANGE ||
-        number > std::numeric_limits<unsigned int>::max()) {
+        number > std::numeric_limits<Unsigned>::max()) {
       ThrowInputError("'", given, "' is not a whole number >= 0");
     }
-    *value = static_cast<unsigned int>(number);
+    *value = static_cast<Unsigned>(number);
   };
-  AddText(name, text, help);
+}
+
+}  // namespace
+
+void OptionRegistry::Add(const std::string& name,
+                         unsigned int* value,
+                         const std::string& help) {
+  AddParsed(
+      name,
+      [value] { return std::to_string(*value); },
+      SetUnsigned(value),
+      help);
+}
+
+void OptionRegistry::Add(const std::string& name,
+                         unsigned long* value,  // NOLINT(runtime/int)
+                         const std::string& help) {
+  AddParsed(
+      name,
+      [value] { return std::to_string(*value); },
+      SetUnsigned(value),
+      help);
 }
 
 void OptionRegistry::AddSwitches(

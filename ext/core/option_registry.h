@@ -72,6 +72,9 @@ class OptionRegistry {
   void Add(const std::string& name,
            unsigned int* value,
            const std::string& help);
+  void Add(const std::string& name,
+           unsigned long* value,  // NOLINT(runtime/int): uint64_t
+           const std::string& help);
 
   // An enumeration given by name; `names` holds every value's.
   template <typename Enum>

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <map>
 
 namespace bayon {
@@ -158,6 +160,11 @@ TEST(OptionRegistry, TextThatIsNotNumbersIsRefused) {
   EXPECT_THROW(seeds.Set("seed", "4294967296"), InputError);
   EXPECT_THROW(seeds.Set("seed", "1.5"), InputError);
   EXPECT_EQ(seeds.Get("seed"), "4294967295");
+  uint64_t big_seed = 1;
+  static_cast<OptionRegistry&>(seeds).Add("big_seed", &big_seed, "Seed");
+  seeds.Set("big_seed", "18446744073709551615");
+  EXPECT_EQ(big_seed, std::numeric_limits<uint64_t>::max());
+  EXPECT_THROW(seeds.Set("big_seed", "18446744073709551616"), InputError);
   EXPECT_EQ(part.axis.direction, Eigen::Vector3d::UnitZ());  // untouched
 }
 

@@ -760,7 +760,7 @@ std::string ComparisonSummary(const Json& c,
 ComparisonInputs ReadComparisonInputs(CompareColmapOptions* options,
                                       bool camera_params_given,
                                       bool camera_model_given) {
-  CheckDirectoryExists(options->workspace_path, "--workspace_path");
+  CheckDirectoryExists(options->workspace_path, "workspace_path");
   ComparisonInputs inputs;
   inputs.workspace = fs::absolute(options->workspace_path).lexically_normal();
   inputs.pipeline = ReadPipelineRecord(inputs.workspace);
@@ -795,7 +795,7 @@ ComparisonInputs ReadComparisonInputs(CompareColmapOptions* options,
     ThrowInputError(options->image_path, ": image folder holds no images");
   }
   if (!options->ground_truth_path.empty()) {
-    CheckDirectoryExists(options->ground_truth_path, "--ground_truth_path");
+    CheckDirectoryExists(options->ground_truth_path, "ground_truth_path");
     const fs::path root(options->ground_truth_path);
     inputs.truth =
         ReadModel(fs::is_directory(root / "sparse") ? (root / "sparse").string()

@@ -99,7 +99,7 @@ void CheckTruthCovers(const EvaluationOptions& options, const Truth& truth) {
   if (dense && truth.surface_path.empty()) {
     ThrowInputError(options.ground_truth_path,
                     ": no surface.ply to judge clouds and meshes against "
-                    "(give --surface_path)");
+                    "(give surface_path)");
   }
   if (dense && !(CompletenessThreshold(options, truth) > 0)) {
     ThrowInputError(
@@ -110,8 +110,8 @@ void CheckTruthCovers(const EvaluationOptions& options, const Truth& truth) {
       (truth.heldout_path.empty() || truth.surface_path.empty())) {
     ThrowInputError(options.ground_truth_path,
                     ": the texture evaluation needs held-out viewpoints and "
-                    "a textured true surface (give --heldout_path and "
-                    "--surface_path)");
+                    "a textured true surface (give heldout_path and "
+                    "surface_path)");
   }
 }
 
@@ -148,7 +148,7 @@ TriangleMesh ReadTexturedModel(const std::string& path,
     if (texture_path.empty()) {
       ThrowInputError(path,
                       ": has texture coordinates but names no TextureFile "
-                      "(give --texture_path)");
+                      "(give texture_path)");
     }
     *texture = ReadImage(texture_path, ImageReadMode::kColor);
   } else if (!model.vertices.HasColors()) {
@@ -596,47 +596,46 @@ void EvaluationOptions::Register(OptionRegistry* r) {
 void EvaluationOptions::Check() const {
   if (image_path.empty() && !image_names.empty()) {
     ThrowInputError(
-        "--image_names needs --image_path, the folder of those photographs");
+        "image_names needs image_path, the folder of those photographs");
   }
   if (!image_path.empty()) {
     if (textured_mesh_path.empty() || input_path.empty() ||
         image_names.empty()) {
       ThrowInputError(
-          "--image_path needs the textured model (--textured_mesh_path), the "
-          "model whose cameras took the photographs (--input_path) and the "
-          "photographs to compare with (--image_names)");
+          "image_path needs the textured model (textured_mesh_path), the "
+          "model whose cameras took the photographs (input_path) and the "
+          "photographs to compare with (image_names)");
     }
-    CheckFileExists(textured_mesh_path, "--textured_mesh_path");
+    CheckFileExists(textured_mesh_path, "textured_mesh_path");
     return;
   }
   if (!silhouette_image_path.empty()) {
     if (mesh_path.empty() || input_path.empty()) {
       ThrowInputError(
-          "--silhouette_image_path needs the mesh (--mesh_path) and the "
-          "model whose cameras see it (--input_path)");
+          "silhouette_image_path needs the mesh (mesh_path) and the "
+          "model whose cameras see it (input_path)");
     }
     SilhouetteOptionsOf(*this).Check();
-    CheckFileExists(mesh_path, "--mesh_path");
+    CheckFileExists(mesh_path, "mesh_path");
     return;
   }
   if (ground_truth_path.empty()) {
-    ThrowInputError("--ground_truth_path is required");
+    ThrowInputError("ground_truth_path is required");
   }
   if (input_path.empty() && cloud_path.empty() && mesh_path.empty() &&
       textured_mesh_path.empty() && database_path.empty()) {
     ThrowInputError(
-        "nothing to evaluate: give --input_path, --cloud_path, "
-        "--mesh_path, --textured_mesh_path or --database_path");
+        "nothing to evaluate: give input_path, cloud_path, "
+        "mesh_path, textured_mesh_path or database_path");
   }
   if (!database_path.empty()) {
-    CheckFileExists(database_path, "--database_path");
+    CheckFileExists(database_path, "database_path");
   }
   if (!edit_input_path.empty()) {
     if (cloud_path.empty()) {
-      ThrowInputError(
-          "--edit_input_path needs the edited cloud as --cloud_path");
+      ThrowInputError("edit_input_path needs the edited cloud as cloud_path");
     }
-    CheckFileExists(edit_input_path, "--edit_input_path");
+    CheckFileExists(edit_input_path, "edit_input_path");
   }
   if (!(off_surface_m >= 0)) {
     ThrowInputError("off_surface_m must be >= 0 (got ", off_surface_m, ")");

@@ -67,7 +67,7 @@ std::string CheckMessage(const EvaluationOptions& options) {
 
 TEST(Evaluation, ChecksRefuseWhatCannotBeEvaluated) {
   EvaluationOptions options;
-  EXPECT_NE(CheckMessage(options).find("--ground_truth_path is required"),
+  EXPECT_NE(CheckMessage(options).find("ground_truth_path is required"),
             std::string::npos);
   options.ground_truth_path = "gt";
   EXPECT_NE(CheckMessage(options).find("nothing to evaluate"),
@@ -78,7 +78,7 @@ TEST(Evaluation, ChecksRefuseWhatCannotBeEvaluated) {
             std::string::npos);
   options = EvaluationOptions();
   options.image_names = {"a.png"};
-  EXPECT_NE(CheckMessage(options).find("--image_names needs --image_path"),
+  EXPECT_NE(CheckMessage(options).find("image_names needs image_path"),
             std::string::npos);
   options.image_path = "photographs";
   EXPECT_NE(CheckMessage(options).find("needs the textured model"),

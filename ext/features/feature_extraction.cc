@@ -107,7 +107,7 @@ void AssignTargets(const std::string& targets_path,
                    const std::string& database_path,
                    std::vector<Job>* jobs) {
   if (targets_path.empty()) return;
-  CheckFileExists(targets_path, "--targets_path");
+  CheckFileExists(targets_path, "targets_path");
   std::map<std::string, Job*> by_name;
   for (Job& job : *jobs) by_name[job.image.name] = &job;
   for (const ImageMeasurement& m : ReadImageMeasurements(targets_path)) {
@@ -191,8 +191,8 @@ FeatureExtractionSummary ExtractFeatures(
     const std::string& image_path,
     const FeatureExtractionOptions& options) {
   options.Check();
-  CheckFileExists(database_path, "--database_path");
-  CheckDirectoryExists(image_path, "--image_path");
+  CheckFileExists(database_path, "database_path");
+  CheckDirectoryExists(image_path, "image_path");
   Timer timer;
   Database database(database_path, Database::Mode::kReadWrite);
   CheckBayonSchema(&database);

@@ -92,7 +92,7 @@ double Number(const std::string& text,
 // The file's lines that carry data (no blank lines, no comments), with
 // their line numbers.
 std::vector<std::pair<int, std::string>> DataLines(const std::string& path) {
-  CheckFileExists(path, "--input_path");
+  CheckFileExists(path, "input_path");
   std::ifstream in(path);
   std::vector<std::pair<int, std::string>> lines;
   std::string line;

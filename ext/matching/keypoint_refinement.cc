@@ -707,10 +707,10 @@ KeypointRefinementSummary RefineDatabaseKeypoints(
     const KeypointRefinementOptions& options) {
   options.Check();
   const Timer total;
-  CheckFileExists(database_path, "--database_path");
+  CheckFileExists(database_path, "database_path");
   CheckDerivedDatabasePath(
       database_path, output_path, overwrite, "refine_keypoints");
-  CheckDirectoryExists(image_path, "--image_path");
+  CheckDirectoryExists(image_path, "image_path");
   KeypointRefinementSummary summary;
 
   Timer timer;

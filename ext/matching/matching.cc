@@ -370,8 +370,8 @@ MatchingSummary MatchImages(const std::string& database_path,
                             const std::string& image_path,
                             const MatchingOptions& options) {
   options.Check();
-  CheckFileExists(database_path, "--database_path");
-  CheckDirectoryExists(image_path, "--image_path");
+  CheckFileExists(database_path, "database_path");
+  CheckDirectoryExists(image_path, "image_path");
   Timer timer;
   Database database(database_path, Database::Mode::kReadWrite);
   CheckBayonSchema(&database);

@@ -632,12 +632,12 @@ Input ReadInput(const std::string& database_path,
                     "and `bayon disparity` first)");
   }
   if (!options.manual_path.empty()) {
-    CheckFileExists(options.manual_path, "--manual_path");
+    CheckFileExists(options.manual_path, "manual_path");
     input.manual = ReadNamedPoints(
         options.manual_path, "manual", image_ids, options.manual_sigma_px);
   }
   if (!options.targets_path.empty()) {
-    CheckFileExists(options.targets_path, "--targets_path");
+    CheckFileExists(options.targets_path, "targets_path");
     std::set<std::string> manual_names;
     for (const TiePointRecord& point : input.manual) {
       manual_names.insert(point.name);
@@ -731,8 +731,8 @@ TiePointSummary FindTiePoints(const std::string& database_path,
                               const TiePointOptions& options) {
   options.Check();
   const Timer timer;
-  CheckFileExists(database_path, "--database_path");
-  CheckDirectoryExists(image_path, "--image_path");
+  CheckFileExists(database_path, "database_path");
+  CheckDirectoryExists(image_path, "image_path");
   if (!colmap_output_path.empty()) {
     CheckDerivedDatabasePath(
         database_path, colmap_output_path, overwrite, "tiepoints");

@@ -258,7 +258,7 @@ DisparitySummary Summarize(const std::vector<SurfaceJob>& jobs) {
 DisparitySummary FitDisparitySurfaces(const std::string& database_path,
                                       const DisparityOptions& options) {
   options.Check();
-  CheckFileExists(database_path, "--database_path");
+  CheckFileExists(database_path, "database_path");
   Timer timer;
   Database database(database_path, Database::Mode::kReadWrite);
   CheckBayonSchema(&database);

@@ -466,7 +466,7 @@ std::string NoPairOrientedReason(
 RelativeSummary OrientImagePairs(const std::string& database_path,
                                  const RelativeOptions& options) {
   options.Check();
-  CheckFileExists(database_path, "--database_path");
+  CheckFileExists(database_path, "database_path");
   Timer timer;
   Database database(database_path, Database::Mode::kReadWrite);
   CheckBayonSchema(&database);

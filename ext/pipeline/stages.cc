@@ -410,7 +410,7 @@ bool IsStageName(const std::string& name) {
 PipelineConfig ReadPipelineConfigs(const std::vector<std::string>& paths) {
   PipelineConfig config;
   for (const std::string& path : paths) {
-    CheckFileExists(path, "--config");
+    CheckFileExists(path, "config");
     std::vector<CLI::ConfigItem> items;
     try {
       items = CLI::ConfigINI().from_file(path);
@@ -499,7 +499,7 @@ std::vector<Stage> MakeStages(const PipelineContext& c,
 
 size_t ResolveWorkspace(PipelineContext* c) {
   if (c->image_path.empty()) c->image_path = JoinPath(c->workspace, "images");
-  CheckDirectoryExists(c->image_path, "--image_path");
+  CheckDirectoryExists(c->image_path, "image_path");
   const size_t num_images = ListImages(c->image_path).size();
   if (num_images == 0) {
     ThrowInputError(c->image_path,

@@ -202,20 +202,35 @@ TriangleMesh MakeTorus(const TorusOptions& options) {
                          });
 }
 
+void NoisyCloudOptions::Register(OptionRegistry* r) {
+  r->Add("num_points", &num_points, "Points to sample");
+  r->Add("sigma_m", &sigma_m, "Mean standard deviation per coordinate, metres");
+  r->Add("sigma_spread",
+         &sigma_spread,
+         "Per-point sigmas spread +- this fraction around sigma_m");
+  r->Add("blunder_fraction",
+         &blunder_fraction,
+         "Share of points displaced along the normal");
+  r->Add("blunder_min_m", &blunder_min_m, "Smallest offset");
+  r->Add("blunder_max_m", &blunder_max_m, "Largest offset");
+  r->Add("with_normals", &with_normals, "1: true normals");
+  r->Add("with_sigmas", &with_sigmas, "1: sx, sy, sz");
+  r->Add("seed", &seed, "Random seed");
+}
+
 void NoisyCloudOptions::Check() const {
-  CheckOption(
-      num_points > 0, "NoisyCloudOptions.num_points", "> 0", num_points);
-  CheckOption(sigma_m >= 0, "NoisyCloudOptions.sigma_m", ">= 0", sigma_m);
+  CheckOption(num_points > 0, "num_points", "> 0", num_points);
+  CheckOption(sigma_m >= 0, "sigma_m", ">= 0", sigma_m);
   CheckOption(sigma_spread >= 0 && sigma_spread < 1,
-              "NoisyCloudOptions.sigma_spread",
+              "sigma_spread",
               "in [0, 1)",
               sigma_spread);
   CheckOption(blunder_fraction >= 0 && blunder_fraction <= 1,
-              "NoisyCloudOptions.blunder_fraction",
+              "blunder_fraction",
               "in [0, 1]",
               blunder_fraction);
   CheckOption(blunder_min_m >= 0 && blunder_max_m >= blunder_min_m,
-              "NoisyCloudOptions.blunder_min_m/blunder_max_m",
+              "blunder_min_m/blunder_max_m",
               "0 <= min <= max",
               StrCat(blunder_min_m, "/", blunder_max_m));
 }

@@ -10,6 +10,7 @@
 // Object coordinates in metres, z up.
 #pragma once
 
+#include "ext/core/option_registry.h"
 #include "ext/core/point_cloud.h"
 
 #include <cstdint>
@@ -76,6 +77,7 @@ struct NoisyCloudOptions {
   bool with_sigmas = true;         // the sx, sy, sz attributes
   bool with_blunder_flags = true;  // the `blunder` attribute (0/1)
   uint64_t seed = 1;
+  void Register(OptionRegistry* registry);
   void Check() const;
 };
 
