@@ -326,7 +326,7 @@ TEST(TextureCommand, BadInput) {
                          "--input_path",
                          fixture + "/model"});
   EXPECT_EQ(evaluate.exit_code, 2) << evaluate.output;
-  EXPECT_NE(evaluate.LastLine().find("--image_names"), std::string::npos)
+  EXPECT_NE(evaluate.LastLine().find("(image_names)"), std::string::npos)
       << evaluate.LastLine();
   for (const char* sub : {"a", "b", "c", "d", "e", "f", "g"}) {
     EXPECT_FALSE(fs::exists(dir + "/" + sub + "/model.png")) << sub;
