@@ -105,10 +105,13 @@ void OptionRegistry::Add(const std::string& name,
 
 namespace {
 
-// A whole number >= 0 that fits into Unsigned, as text.
+// A whole number >= 0 that fits into Unsigned, read and written as text.
 template <typename Unsigned>
-std::function<void(const std::string&)> SetUnsigned(Unsigned* value) {
-  return [value](const std::string& given) {
+void AddUnsigned(OptionRegistry* registry,
+                 const std::string& name,
+                 Unsigned* value,
+                 const std::string& help) {
+  const auto set = [value](const std::string& given) {
     const std::string item = Trimmed(given);
     char* rest = nullptr;
     errno = 0;
@@ -119,6 +122,8 @@ std::function<void(const std::string&)> SetUnsigned(Unsigned* value) {
     }
     *value = static_cast<Unsigned>(number);
   };
+  registry->AddParsed(
+      name, [value] { return std::to_string(*value); }, set, help);
 }
 
 }  // namespace
@@ -126,21 +131,13 @@ std::function<void(const std::string&)> SetUnsigned(Unsigned* value) {
 void OptionRegistry::Add(const std::string& name,
                          unsigned int* value,
                          const std::string& help) {
-  AddParsed(
-      name,
-      [value] { return std::to_string(*value); },
-      SetUnsigned(value),
-      help);
+  AddUnsigned(this, name, value, help);
 }
 
 void OptionRegistry::Add(const std::string& name,
                          unsigned long* value,  // NOLINT(runtime/int)
                          const std::string& help) {
-  AddParsed(
-      name,
-      [value] { return std::to_string(*value); },
-      SetUnsigned(value),
-      help);
+  AddUnsigned(this, name, value, help);
 }
 
 void OptionRegistry::AddSwitches(
