@@ -164,37 +164,37 @@ class NameRecorder : public OptionRegistry {
   }
 };
 
-TEST(CommandOptions, DenseRegistersItsNestedOptionsUnderTheirNames) {
-  DenseOptions options;
+// Expects each of `names` registered by Options once, and no name twice.
+template <typename Options>
+void ExpectRegisteredOnce(const std::vector<std::string>& names) {
+  Options options;
   NameRecorder recorder;
   options.Register(&recorder);
   EXPECT_EQ(recorder.duplicates, 0);
-  for (const char* name : {"mode",
-                           "patch_match.window_radius",
-                           "fusion.min_consistent_views",
-                           "search.min_ncc",
-                           "mpgc.max_iterations",
-                           "mpgc.lsm.patch_radius",
-                           "mpgc.lsm.interpolation"}) {
+  for (const std::string& name : names) {
     EXPECT_EQ(recorder.names.count(name), 1u) << name;
   }
 }
 
+TEST(CommandOptions, DenseRegistersItsNestedOptionsUnderTheirNames) {
+  ExpectRegisteredOnce<DenseOptions>({"mode",
+                                      "patch_match.window_radius",
+                                      "fusion.min_consistent_views",
+                                      "search.min_ncc",
+                                      "mpgc.max_iterations",
+                                      "mpgc.lsm.patch_radius",
+                                      "mpgc.lsm.interpolation"});
+}
+
 TEST(CommandOptions, MeshRegistersEachMethodsOptionsUnderItsName) {
-  MeshOptions options;
-  NameRecorder recorder;
-  options.Register(&recorder);
-  EXPECT_EQ(recorder.duplicates, 0);
-  for (const char* name : {"method",
-                           "cylinder.axis_direction",
-                           "cylinder.metric",
-                           "poisson.depth",
-                           "colmap_poisson.depth",
-                           "delaunay_graph_cut.max_edge_factor",
-                           "normals.orientation",
-                           "cleanup.max_hole_edges"}) {
-    EXPECT_EQ(recorder.names.count(name), 1u) << name;
-  }
+  ExpectRegisteredOnce<MeshOptions>({"method",
+                                     "cylinder.axis_direction",
+                                     "cylinder.metric",
+                                     "poisson.depth",
+                                     "colmap_poisson.depth",
+                                     "delaunay_graph_cut.max_edge_factor",
+                                     "normals.orientation",
+                                     "cleanup.max_hole_edges"});
 }
 
 TEST(CommandOptions, TextThatIsNotTheValueIsRefusedNamingTheFlag) {
