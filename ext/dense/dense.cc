@@ -26,10 +26,10 @@ namespace bayon {
 DenseOptions::DenseOptions() {
   // 11 x 11 patches: enough texture for the eight parameters per search
   // patch on the tower's stone, a quarter of the arithmetic of lsm.h's 15.
-  // (9 x 9: on the rendered tower 35 % less MPGC time, median 0.331 against
-  // 0.344 GSD at the same RMS and completeness, but on a flat textured
-  // plane MPGC then ends less precise than the fused points it starts
-  // from, dense_multi_view_test: 0.22 against 0.19 mm, 11 x 11 0.17.)
+  // (9 x 9: on the rendered tower a fifth less MPGC time, median 0.331
+  // against 0.34 GSD at the same RMS and completeness, but on a flat
+  // textured plane MPGC then ends less precise than the fused points it
+  // starts from, dense_multi_view_test: 0.22 against 0.19 mm, 11 x 11 0.17.)
   mpgc.lsm.patch_radius = 5;
   // A step that lowers the sum of squares by less than sigma0^2 has moved
   // the point by less than one of its standard deviations: converged.
