@@ -135,7 +135,7 @@ void OptionRegistry::Add(const std::string& name,
 }
 
 void OptionRegistry::Add(const std::string& name,
-                         unsigned long* value,  // NOLINT(runtime/int)
+                         uint64_t* value,
                          const std::string& help) {
   AddUnsigned(this, name, value, help);
 }

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <utility>
@@ -72,9 +73,7 @@ class OptionRegistry {
   void Add(const std::string& name,
            unsigned int* value,
            const std::string& help);
-  void Add(const std::string& name,
-           unsigned long* value,  // NOLINT(runtime/int): uint64_t
-           const std::string& help);
+  void Add(const std::string& name, uint64_t* value, const std::string& help);
 
   // An enumeration given by name; `names` holds every value's.
   template <typename Enum>
