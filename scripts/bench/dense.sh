@@ -7,8 +7,9 @@
 #             points triangulated into it, the default (multiview: every
 #             photograph a master); judged by `bayon evaluate` against the
 #             true surface (completeness within 5 GSD)
-#   paper     the same with `--mode paper` (5 masters, 7-pixel cells: the
-#             paper's sampling, the reproduction row)
+#   paper     the same with configs/dense_ring.ini (`--mode paper`: 5
+#             masters, 7-pixel cells: the paper's sampling, the
+#             reproduction row)
 #   one_light the same tower with every photograph in the first one's
 #             light (`synth --one_light 1`), the same model: a control for
 #             what the photographs' changing sun costs
@@ -85,10 +86,10 @@ evaluate() {
 }
 dense tower "$tower/ws/images" "$tower/model"
 evaluate tower "$tower/ws/gt"
-# The paper's sampling, as the reproduction rows measured it (with the MPGC
-# convergence they were measured with, configs/dense_ring.ini's).
-dense paper "$tower/ws/images" "$tower/model" --mode paper --num_masters 5 \
-  --mpgc.convergence_sigma 0.3
+# The paper's sampling, as the reproduction rows measured it: the paper
+# mode's config (5 masters, 7-pixel cells, MPGC's convergence as measured).
+dense paper "$tower/ws/images" "$tower/model" \
+  --config "$(dirname "$0")/../../configs/dense_ring.ini"
 evaluate paper "$tower/ws/gt"
 # The control: the same tower, stations and noise, every photograph in the
 # first one's light (`synth --one_light 1`), with the same model: what the
