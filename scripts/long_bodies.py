@@ -2,7 +2,8 @@
 # Function bodies longer than 150 lines in ext/ and tools/ (not tests), from
 # the signature to the closing brace, longest first: issue 33's list of bodies
 # still to split. Run from the repository root: scripts/long_bodies.py
-import re, glob, sys
+import glob
+import re
 res = []
 files = [f for f in glob.glob('ext/*/*.cc') + glob.glob('tools/*.cc') if not f.endswith('_test.cc')]
 for f in files:
@@ -20,7 +21,7 @@ for f in files:
                 depth = 0; k = j
                 while k < len(lines):
                     depth += lines[k].count('{') - lines[k].count('}')
-                    if depth == 0 and k >= j: break
+                    if depth == 0: break
                     k += 1
                 n = k - i + 1
                 m = re.search(r'([\w:~]+)\(', l)
