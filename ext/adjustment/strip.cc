@@ -65,6 +65,31 @@ Eigen::Vector3d LogRotation(const Eigen::Quaterniond& q) {
   return aa.angle() * aa.axis();
 }
 
+// Why the view graph left a pair out (view_graph.h), one line.
+std::string WhyDropped(const DroppedPair& dropped,
+                       const ViewGraphOptions& options) {
+  if (dropped.num_triangles > 0) {
+    return StrCat("its rotation disagrees with the loops it lies on (",
+                  dropped.num_failing,
+                  " of ",
+                  dropped.num_triangles,
+                  " triangles fail, median loop error ",
+                  dropped.median_loop_error_deg,
+                  " deg, above ",
+                  options.max_loop_error_deg,
+                  " deg and ",
+                  options.max_loop_error_sigmas,
+                  " standard deviations)");
+  }
+  return StrCat("its rotation disagrees with a loop of ",
+                dropped.loop_length,
+                " pairs through the pairs that agree (loop error ",
+                dropped.loop_error_deg,
+                " deg, allowed ",
+                dropped.loop_limit_deg,
+                " deg), and the loop's other pairs have more conjugate points");
+}
+
 class StripBuilder {
  public:
   StripBuilder(const std::string& database_path,
@@ -212,27 +237,18 @@ class StripBuilder {
       pair.rotation = pose->rotation.toRotationMatrix();
       const auto sigma = rotation_sigma_deg_.find(key);
       if (sigma != rotation_sigma_deg_.end()) pair.sigma_deg = sigma->second;
+      pair.weight = static_cast<double>(geometry.inlier_matches.rows());
       pairs.push_back(pair);
       keys.push_back(key);
     }
     for (const DroppedPair& dropped :
          FindInconsistentPairs(pairs, options_.view_graph)) {
       const auto [a, b] = keys[dropped.pair_idx];
-      const std::string line =
-          StrCat(images_[a].row.name,
-                 " - ",
-                 images_[b].row.name,
-                 ": its rotation disagrees with the loops it lies on (",
-                 dropped.num_failing,
-                 " of ",
-                 dropped.num_triangles,
-                 " triangles fail, median loop error ",
-                 dropped.median_loop_error_deg,
-                 " deg, above ",
-                 options_.view_graph.max_loop_error_deg,
-                 " deg and ",
-                 options_.view_graph.max_loop_error_sigmas,
-                 " standard deviations)");
+      const std::string line = StrCat(images_[a].row.name,
+                                      " - ",
+                                      images_[b].row.name,
+                                      ": ",
+                                      WhyDropped(dropped, options_.view_graph));
       LOG(WARNING) << "pair dropped: " << line;
       result_.dropped_pairs.push_back(line);
       geometries_.erase(keys[dropped.pair_idx]);

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
+#include <random>
 #include <tuple>
 
 namespace bayon {
@@ -16,10 +18,15 @@ void ViewGraphOptions::Register(OptionRegistry* r) {
   r->Add("max_loop_error_deg",
          &max_loop_error_deg,
          "A pair most of whose triangles of relative rotations fail to close "
-         "within this is left out, deg");
+         "within this is left out (a longer loop: this x sqrt(its pairs / "
+         "3)), deg");
   r->Add("max_loop_error_sigmas",
          &max_loop_error_sigmas,
-         "... and within this many of the triangle's standard deviations");
+         "... and within this many of the loop's standard deviations");
+  r->Add("num_spanning_trees",
+         &num_spanning_trees,
+         "Spanning trees of the pairs tried for the consensus of the longer "
+         "loops");
 }
 
 void ViewGraphOptions::Check() const {
@@ -29,6 +36,10 @@ void ViewGraphOptions::Check() const {
               "max_loop_error_sigmas",
               "> 0",
               max_loop_error_sigmas);
+  CheckOption(num_spanning_trees >= 1,
+              "num_spanning_trees",
+              ">= 1",
+              num_spanning_trees);
 }
 
 double RotationAngleDeg(const Eigen::Matrix3d& rotation) {
@@ -89,6 +100,166 @@ std::vector<std::vector<Triangle>> Triangles(
   return triangles;
 }
 
+// The longer loops (see the header): spanning trees of the active pairs,
+// the rotations each gives the images, and the loop each other pair closes
+// through it.
+class LoopConsensus {
+ public:
+  LoopConsensus(const std::vector<ViewGraphPair>& pairs,
+                const std::vector<bool>& active,
+                const ViewGraphOptions& options)
+      : pairs_(pairs), options_(options) {
+    std::map<int, int> idx;
+    for (size_t p = 0; p < pairs.size(); ++p) {
+      if (!active[p]) continue;
+      active_.push_back(static_cast<int>(p));
+      for (int image : {pairs[p].image1, pairs[p].image2}) {
+        idx.emplace(image, static_cast<int>(idx.size()));
+      }
+    }
+    for (int p : active_) {
+      ends_[p] = {idx.at(pairs[p].image1), idx.at(pairs[p].image2)};
+    }
+    num_images_ = static_cast<int>(idx.size());
+    heaviest_first_ = active_;
+    std::stable_sort(
+        heaviest_first_.begin(), heaviest_first_.end(), [&](int a, int b) {
+          return pairs_[a].weight > pairs_[b].weight;
+        });
+  }
+
+  // The pairs whose loop fails through the consensus tree and whose
+  // heaviest tree closes less weight.
+  std::vector<DroppedPair> Inconsistent() const {
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> unit(0, 1);
+    Tree best = Grow(heaviest_first_);
+    for (int t = 1; t < options_.num_spanning_trees; ++t) {
+      // A weighted random order: each pair's key is an exponential draw
+      // with its weight as rate, so heavier pairs tend to come first.
+      std::vector<std::pair<double, int>> keys;
+      for (int p : active_) {
+        keys.emplace_back(-std::log(1 - unit(rng)) / pairs_[p].weight, p);
+      }
+      std::sort(keys.begin(), keys.end());
+      std::vector<int> order;
+      for (const auto& key : keys) order.push_back(key.second);
+      Tree tree = Grow(order);
+      if (tree.closed_weight > best.closed_weight) best = std::move(tree);
+    }
+    std::vector<DroppedPair> dropped;
+    for (int p : active_) {
+      const Loop& loop = best.loops.at(p);
+      if (loop.closes) continue;
+      std::vector<int> order = {p};
+      for (int q : heaviest_first_) {
+        if (q != p) order.push_back(q);
+      }
+      if (Grow(order).closed_weight >= best.closed_weight) continue;
+      DroppedPair pair;
+      pair.pair_idx = p;
+      pair.loop_length = loop.length;
+      pair.loop_error_deg = loop.error_deg;
+      pair.loop_limit_deg = loop.limit_deg;
+      dropped.push_back(pair);
+    }
+    return dropped;
+  }
+
+ private:
+  struct Loop {
+    int length = 0;  // pairs
+    double error_deg = 0;
+    double limit_deg = 0;
+    bool closes = true;
+  };
+  struct Tree {
+    std::map<int, Loop> loops;  // by pair
+    double closed_weight = 0;
+  };
+
+  // The spanning forest that takes the pairs in this order where they join
+  // two parts (Kruskal), and every active pair's loop through it.
+  Tree Grow(const std::vector<int>& order) const {
+    std::vector<int> part(num_images_);
+    std::iota(part.begin(), part.end(), 0);
+    const auto find = [&](int i) {
+      while (part[i] != i) i = part[i] = part[part[i]];
+      return i;
+    };
+    std::vector<std::vector<int>> tree_pairs(num_images_);
+    for (int p : order) {
+      const auto [i, j] = ends_.at(p);
+      if (find(i) == find(j)) continue;
+      part[find(i)] = find(j);
+      tree_pairs[i].push_back(p);
+      tree_pairs[j].push_back(p);
+    }
+    // Each image's rotation (camera from the root's frame), depth, parent
+    // and the variance accumulated from the root.
+    std::vector<Eigen::Matrix3d> rotation(num_images_);
+    std::vector<int> parent(num_images_, -1), depth(num_images_, -1);
+    std::vector<double> variance(num_images_, 0);
+    for (int root = 0; root < num_images_; ++root) {
+      if (depth[root] >= 0) continue;
+      rotation[root].setIdentity();
+      depth[root] = 0;
+      std::vector<int> stack = {root};
+      while (!stack.empty()) {
+        const int u = stack.back();
+        stack.pop_back();
+        for (int p : tree_pairs[u]) {
+          const auto [i, j] = ends_.at(p);
+          const int v = i == u ? j : i;
+          if (depth[v] >= 0) continue;
+          const Eigen::Matrix3d& v_from_u = pairs_[p].rotation;  // j from i
+          rotation[v] =
+              (i == u ? v_from_u : Eigen::Matrix3d(v_from_u.transpose())) *
+              rotation[u];
+          parent[v] = u;
+          depth[v] = depth[u] + 1;
+          variance[v] = variance[u] + Square(pairs_[p].sigma_deg);
+          stack.push_back(v);
+        }
+      }
+    }
+    Tree tree;
+    for (int p : active_) {
+      const auto [i, j] = ends_.at(p);
+      int a = i, b = j;
+      while (depth[a] > depth[b]) a = parent[a];
+      while (depth[b] > depth[a]) b = parent[b];
+      while (a != b) {
+        a = parent[a];
+        b = parent[b];
+      }
+      Loop loop;
+      loop.length = depth[i] + depth[j] - 2 * depth[a] + 1;
+      loop.error_deg = RotationAngleDeg(pairs_[p].rotation * rotation[i] *
+                                        rotation[j].transpose());
+      const double sigma =
+          std::sqrt(variance[i] + variance[j] - 2 * variance[a] +
+                    Square(pairs_[p].sigma_deg));
+      loop.limit_deg =
+          std::max(options_.max_loop_error_deg * std::sqrt(loop.length / 3.0),
+                   options_.max_loop_error_sigmas * sigma);
+      loop.closes = loop.error_deg <= loop.limit_deg;
+      if (loop.closes) tree.closed_weight += pairs_[p].weight;
+      tree.loops[p] = loop;
+    }
+    return tree;
+  }
+
+  static double Square(double x) { return x * x; }
+
+  const std::vector<ViewGraphPair>& pairs_;
+  const ViewGraphOptions& options_;
+  std::vector<int> active_;
+  std::vector<int> heaviest_first_;
+  std::map<int, std::pair<int, int>> ends_;  // pair -> its images' indices
+  int num_images_ = 0;
+};
+
 }  // namespace
 
 std::vector<DroppedPair> FindInconsistentPairs(
@@ -119,10 +290,15 @@ std::vector<DroppedPair> FindInconsistentPairs(
         worst = candidate;
       }
     }
-    if (worst.pair_idx < 0) return dropped;
+    if (worst.pair_idx < 0) break;
     active[worst.pair_idx] = false;
     dropped.push_back(worst);
   }
+  for (const DroppedPair& pair :
+       LoopConsensus(pairs, active, options).Inconsistent()) {
+    dropped.push_back(pair);
+  }
+  return dropped;
 }
 
 }  // namespace bayon

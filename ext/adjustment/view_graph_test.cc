@@ -105,16 +105,113 @@ TEST(ViewGraph, AWeakPairIsNotTakenForAFalseOne) {
   EXPECT_TRUE(FindInconsistentPairs(pairs, ViewGraphOptions()).empty());
 }
 
-TEST(ViewGraph, PairsOnNoTriangleCannotBeTested) {
-  // Neighbours only: a ring without triangles keeps even a false pair.
-  std::vector<ViewGraphPair> pairs;
-  for (const ViewGraphPair& pair : Ring(8, 0.5, {2}, 3)) {
-    if ((pair.image2 - pair.image1 + 8) % 8 == 1) pairs.push_back(pair);
+// The neighbours of a ring of `n` (no triangles), each pair with
+// `num_points` conjugate points, and chords across it from `chords`
+// (image pairs, true rotations).
+std::vector<ViewGraphPair> RingOfNeighbours(
+    int n, unsigned seed, const std::vector<std::pair<int, int>>& chords = {}) {
+  std::vector<ViewGraphPair> ring;
+  const std::vector<ViewGraphPair> all = Ring(n, 0.5, {}, seed);
+  for (const ViewGraphPair& pair : all) {
+    if ((pair.image2 - pair.image1 + n) % n == 1) ring.push_back(pair);
   }
-  ASSERT_EQ(pairs.size(), 8u);
+  // A chord's rotation from the ring's own: j from i through the
+  // neighbours between them.
+  for (const auto& [i, j] : chords) {
+    ViewGraphPair chord;
+    chord.image1 = i;
+    chord.image2 = j;
+    for (int k = i; k != j; k = (k + 1) % n) {
+      chord.rotation = ring[k].rotation * chord.rotation;
+    }
+    ring.push_back(chord);
+  }
+  return ring;
+}
+
+void TurnPair(ViewGraphPair* pair, double angle_deg) {
+  pair->rotation =
+      Eigen::AngleAxisd(angle_deg * kDeg, Eigen::Vector3d::UnitZ()) *
+      pair->rotation;
+}
+
+TEST(ViewGraph, AFalsePairOnLongerLoopsOnlyIsDropped) {
+  // A ring of 16 neighbours with two chords that cross it (0-5, 8-13),
+  // every pair on loops of 5 to 12 pairs and none on a triangle. Chord
+  // 3-11, turned by 90 deg, is the doppelganger of a symmetric object:
+  // it lies on no triangle, but on loops of 9 pairs either way.
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    std::vector<ViewGraphPair> pairs =
+        RingOfNeighbours(16, seed, {{0, 5}, {8, 13}, {3, 11}});
+    for (ViewGraphPair& pair : pairs) pair.weight = 100;
+    const int false_pair = static_cast<int>(pairs.size()) - 1;
+    EXPECT_TRUE(FindInconsistentPairs(pairs, ViewGraphOptions()).empty())
+        << seed;
+    TurnPair(&pairs[false_pair], 90);
+    pairs[false_pair].weight = 40;
+    const std::vector<DroppedPair> dropped =
+        FindInconsistentPairs(pairs, ViewGraphOptions());
+    ASSERT_EQ(Dropped(dropped), std::vector<int>{false_pair}) << seed;
+    EXPECT_EQ(dropped[0].num_triangles, 0);
+    EXPECT_GE(dropped[0].loop_length, 5);
+    EXPECT_NEAR(dropped[0].loop_error_deg, 90, 5);
+    EXPECT_LT(dropped[0].loop_limit_deg, 10);
+  }
+}
+
+TEST(ViewGraph, ALoopThatCannotTellWhichPairIsFalseKeepsThemAll) {
+  // One loop of 8 equal neighbours, one of them 60 deg off: the loop
+  // fails, but nothing tells which pair is false, so none is dropped. With
+  // fewer conjugate points than the others, the false one gives way.
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    std::vector<ViewGraphPair> pairs = RingOfNeighbours(8, seed);
+    ASSERT_EQ(pairs.size(), 8u);
+    TurnPair(&pairs[2], 60);
+    EXPECT_TRUE(FindInconsistentPairs(pairs, ViewGraphOptions()).empty())
+        << seed;
+    for (ViewGraphPair& pair : pairs) pair.weight = 100;
+    pairs[2].weight = 30;
+    EXPECT_EQ(Dropped(FindInconsistentPairs(pairs, ViewGraphOptions())),
+              std::vector<int>{2})
+        << seed;
+  }
+}
+
+TEST(ViewGraph, LongLoopsAllowForTheirErrorsAndBridgesAreKept) {
+  // A ring of 30 neighbours, each up to 2 deg off: the ring's loop error
+  // grows with its length (beyond a triangle's 5 deg for these seeds) and
+  // passes, so even its lightest pair is kept. A false pair that is the
+  // only link of an image to the rest cannot be tested.
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    std::vector<ViewGraphPair> pairs;
+    for (ViewGraphPair pair : Ring(30, 2.0, {}, seed)) {
+      if ((pair.image2 - pair.image1 + 30) % 30 == 1) {
+        pair.weight = pairs.empty() ? 50 : 100;
+        pairs.push_back(pair);
+      }
+    }
+    ViewGraphPair bridge;
+    bridge.image1 = 4;
+    bridge.image2 = 99;
+    TurnPair(&bridge, 120);
+    bridge.weight = 10;
+    pairs.push_back(bridge);
+    EXPECT_TRUE(FindInconsistentPairs(pairs, ViewGraphOptions()).empty())
+        << seed;
+  }
+}
+
+TEST(ViewGraph, PairsOnNoLoopCannotBeTested) {
+  // A chain of neighbours without its closing pair keeps even a false one.
+  std::vector<ViewGraphPair> pairs = RingOfNeighbours(8, 3);
+  pairs.pop_back();
+  TurnPair(&pairs[2], 70);
   EXPECT_TRUE(FindInconsistentPairs(pairs, ViewGraphOptions()).empty());
   ViewGraphOptions bad;
   bad.max_loop_error_deg = 0;
+  EXPECT_THROW(FindInconsistentPairs(pairs, bad), InputError);
+  bad = ViewGraphOptions();
+  bad.num_spanning_trees = 0;
   EXPECT_THROW(FindInconsistentPairs(pairs, bad), InputError);
 }
 

@@ -152,10 +152,23 @@ for detector in detectors:
         continue
     oriented = [p for p in r["pairs"] if p.get("oriented")]
     false = [p for p in oriented if p.get("rotation_error_deg", 0) > 5]
-    print("  %-8s %3d oriented, %d false: %s" % (
-        detector, len(oriented), len(false),
-        ", ".join("%s-%s %.0f deg" % (p["image1"][6:9], p["image2"][6:9],
-                                      p["rotation_error_deg"]) for p in false)))
+    # What strip's view graph left out (strip.json), and so the false pairs
+    # left in its input.
+    try:
+        strip = json.load(open(os.path.join(
+            root, "tower", detector, "calibrated", "initial", "strip.json")))
+        dropped = {frozenset(line.split(":")[0].split(" - "))
+                   for line in strip["dropped_pairs"]}
+    except (OSError, KeyError, ValueError):
+        dropped = set()
+    left = [p for p in false
+            if frozenset((p["image1"], p["image2"])) not in dropped]
+    print("  %-8s %3d oriented, %d false: %s; strip dropped %d, %d false left"
+          % (detector, len(oriented), len(false),
+             ", ".join("%s-%s %.0f deg" % (p["image1"][6:9], p["image2"][6:9],
+                                           p["rotation_error_deg"])
+                       for p in false),
+             len(dropped), len(left)))
 print("\ncentre RMS in mm for the real sets, model units for the tower; "
       "pairs: oriented by `relative`;\nfeat+match: wall time of features "
       "and match on %s cores." % os.environ.get("BAYON_THREADS", "2"))
