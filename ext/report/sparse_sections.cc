@@ -243,6 +243,52 @@ std::string StationView(const Workspace& ws,
   return SvgStationView(points, cameras, view);
 }
 
+// What the strip (strip.json) did not orient from its models: the images
+// it could not orient, those it placed by spatial resection, and the pairs
+// its view graph left out, each with strip's reason.
+std::string StripNotes(const Json& strip) {
+  std::string html;
+  const Json& unoriented = Child(strip, "unoriented_images");
+  if (unoriented.is_array() && !unoriented.empty()) {
+    std::string names;
+    for (const Json& name : unoriented) {
+      names += (names.empty() ? "" : ", ") +
+               HtmlEscape(name.is_string() ? name.get<std::string>() : "");
+    }
+    html += Paragraph(
+        "Not oriented by the strip (no model attached them and "
+        "too few intersected tie points placed them): " +
+        names + ".");
+  }
+  const Json& resected = Child(strip, "resected_images");
+  if (resected.is_array() && !resected.empty()) {
+    std::string names;
+    for (const Json& image : resected) {
+      names += (names.empty() ? "" : ", ") + HtmlEscape(String(image, "name")) +
+               " (" + FormatCount(Integer(image, "num_inliers")) + " of " +
+               FormatCount(Integer(image, "num_points")) + " points, RMS " +
+               FormatFixed(Number(image, "rms_px"), 2) + " px)";
+    }
+    html += Paragraph(
+        "Placed by spatial resection from the tie points: " + names + ".");
+  }
+  const Json& dropped = Child(strip, "dropped_pairs");
+  if (dropped.is_array() && !dropped.empty()) {
+    std::string items;
+    for (const Json& line : dropped) {
+      items += "<li>" +
+               HtmlEscape(line.is_string() ? line.get<std::string>() : "") +
+               "</li>";
+    }
+    html += Paragraph(FormatCount(dropped.size()) +
+                      (dropped.size() == 1 ? " image pair" : " image pairs") +
+                      " left out before the strip, the relative rotations "
+                      "disagreeing with the loops they lie on:") +
+            "<ul>" + items + "</ul>";
+  }
+  return html;
+}
+
 }  // namespace
 
 Section NetworkSection(const Workspace& ws, Page* page) {
@@ -272,6 +318,7 @@ Section NetworkSection(const Workspace& ws, Page* page) {
     }
   }
   section.html += Paragraph(text);
+  if (ws.strip.ok()) section.html += StripNotes(strip);
   const std::string x = axes.datum_axes ? "X" : "x";
   const std::string y = axes.datum_axes ? "Y" : "y";
   const std::string z = axes.datum_axes ? "Z" : "z";

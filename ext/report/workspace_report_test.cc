@@ -231,6 +231,36 @@ TEST(WorkspaceReport, ShowsWhatExistsAndSaysWhatCannotBeRead) {
   }
 }
 
+TEST(WorkspaceReport, SaysWhatTheStripLeftOut) {
+  const std::string dir = MakeWorkspace("strip_notes");
+  fs::create_directories(dir + "/sparse/initial");
+  WriteFileAtomically(
+      dir + "/sparse/initial/strip.json",
+      R"({"closed_ring": false, "unoriented_images": ["ring_9.png"],
+          "resected_images": [{"name": "ring_7.png", "num_inliers": 40,
+                               "num_points": 45, "rms_px": 0.81}],
+          "dropped_pairs": [
+            "ring_2.png - ring_6.png: its rotation disagrees <loop>"]})");
+  const WorkspaceReport report =
+      BuildWorkspaceReport(dir, WorkspaceReportOptions());
+  EXPECT_TRUE(report.problems.empty());
+  EXPECT_NE(report.html.find("The strip is open"), std::string::npos);
+  EXPECT_NE(report.html.find("Not oriented by the strip (no model attached "
+                             "them and too few intersected tie points placed "
+                             "them): ring_9.png."),
+            std::string::npos);
+  EXPECT_NE(report.html.find("Placed by spatial resection from the tie "
+                             "points: ring_7.png (40 of 45 points, RMS 0.81 "
+                             "px)."),
+            std::string::npos);
+  EXPECT_NE(report.html.find("1 image pair left out before the strip"),
+            std::string::npos);
+  EXPECT_NE(report.html.find("<li>ring_2.png - ring_6.png: its rotation "
+                             "disagrees"),
+            std::string::npos);
+  EXPECT_NE(report.html.find("&lt;loop&gt;"), std::string::npos);
+}
+
 TEST(WorkspaceReport, ShowsTheComparisonWithColmap) {
   const std::string dir = MakeWorkspace("comparison");
   fs::create_directories(dir + "/colmap");
