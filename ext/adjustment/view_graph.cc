@@ -131,22 +131,7 @@ class LoopConsensus {
   // The pairs whose loop fails through the consensus tree and whose
   // heaviest tree closes less weight.
   std::vector<DroppedPair> Inconsistent() const {
-    std::mt19937 rng(1);
-    std::uniform_real_distribution<double> unit(0, 1);
-    Tree best = Grow(heaviest_first_);
-    for (int t = 1; t < options_.num_spanning_trees; ++t) {
-      // A weighted random order: each pair's key is an exponential draw
-      // with its weight as rate, so heavier pairs tend to come first.
-      std::vector<std::pair<double, int>> keys;
-      for (int p : active_) {
-        keys.emplace_back(-std::log(1 - unit(rng)) / pairs_[p].weight, p);
-      }
-      std::sort(keys.begin(), keys.end());
-      std::vector<int> order;
-      for (const auto& key : keys) order.push_back(key.second);
-      Tree tree = Grow(order);
-      if (tree.closed_weight > best.closed_weight) best = std::move(tree);
-    }
+    const Tree best = Consensus();
     std::vector<DroppedPair> dropped;
     for (int p : active_) {
       const Loop& loop = best.loops.at(p);
@@ -177,6 +162,28 @@ class LoopConsensus {
     std::map<int, Loop> loops;  // by pair
     double closed_weight = 0;
   };
+
+  // Of the heaviest tree and num_spanning_trees - 1 drawn at random, the
+  // one whose loops close for the most weight (the first of equals).
+  Tree Consensus() const {
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> unit(0, 1);
+    Tree best = Grow(heaviest_first_);
+    for (int t = 1; t < options_.num_spanning_trees; ++t) {
+      // A weighted random order: each pair's key is an exponential draw
+      // with its weight as rate, so heavier pairs tend to come first.
+      std::vector<std::pair<double, int>> keys;
+      for (int p : active_) {
+        keys.emplace_back(-std::log(1 - unit(rng)) / pairs_[p].weight, p);
+      }
+      std::sort(keys.begin(), keys.end());
+      std::vector<int> order;
+      for (const auto& key : keys) order.push_back(key.second);
+      Tree tree = Grow(order);
+      if (tree.closed_weight > best.closed_weight) best = std::move(tree);
+    }
+    return best;
+  }
 
   // The spanning forest that takes the pairs in this order where they join
   // two parts (Kruskal), and every active pair's loop through it.
@@ -237,8 +244,10 @@ class LoopConsensus {
       loop.length = depth[i] + depth[j] - 2 * depth[a] + 1;
       loop.error_deg = RotationAngleDeg(pairs_[p].rotation * rotation[i] *
                                         rotation[j].transpose());
+      // The variances along the loop: from the root to i and to j, less
+      // the common part, and the pair's own.
       const double sigma =
-          std::sqrt(variance[i] + variance[j] - 2 * variance[a] +
+          std::sqrt(std::max(0.0, variance[i] + variance[j] - 2 * variance[a]) +
                     Square(pairs_[p].sigma_deg));
       loop.limit_deg =
           std::max(options_.max_loop_error_deg * std::sqrt(loop.length / 3.0),
