@@ -16,6 +16,7 @@
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
 #include "ext/core/statistics.h"
+#include "ext/core/string_printf.h"
 #include "ext/core/union_find.h"
 
 #include <Eigen/Dense>
@@ -69,25 +70,23 @@ Eigen::Vector3d LogRotation(const Eigen::Quaterniond& q) {
 std::string WhyDropped(const DroppedPair& dropped,
                        const ViewGraphOptions& options) {
   if (dropped.num_triangles > 0) {
-    return StrCat("its rotation disagrees with the loops it lies on (",
-                  dropped.num_failing,
-                  " of ",
-                  dropped.num_triangles,
-                  " triangles fail, median loop error ",
-                  dropped.median_loop_error_deg,
-                  " deg, above ",
-                  options.max_loop_error_deg,
-                  " deg and ",
-                  options.max_loop_error_sigmas,
-                  " standard deviations)");
+    return StringPrintf(
+        "its rotation disagrees with the loops it lies on (%d of %d "
+        "triangles fail, median loop error %.1f deg, above %g deg and %g "
+        "standard deviations)",
+        dropped.num_failing,
+        dropped.num_triangles,
+        dropped.median_loop_error_deg,
+        options.max_loop_error_deg,
+        options.max_loop_error_sigmas);
   }
-  return StrCat("its rotation disagrees with a loop of ",
-                dropped.loop_length,
-                " pairs through the pairs that agree (loop error ",
-                dropped.loop_error_deg,
-                " deg, allowed ",
-                dropped.loop_limit_deg,
-                " deg), and the loop's other pairs have more conjugate points");
+  return StringPrintf(
+      "its rotation disagrees with a loop of %d pairs through the pairs that "
+      "agree (loop error %.1f deg, allowed %.1f deg), and the loop's other "
+      "pairs have more conjugate points",
+      dropped.loop_length,
+      dropped.loop_error_deg,
+      dropped.loop_limit_deg);
 }
 
 class StripBuilder {

@@ -4,11 +4,11 @@
 #include "ext/core/errors.h"
 #include "ext/core/rigid3.h"
 #include "ext/core/statistics.h"
+#include "ext/core/union_find.h"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numeric>
 #include <random>
 #include <tuple>
 
@@ -188,17 +188,12 @@ class LoopConsensus {
   // The spanning forest that takes the pairs in this order where they join
   // two parts (Kruskal), and every active pair's loop through it.
   Tree Grow(const std::vector<int>& order) const {
-    std::vector<int> part(num_images_);
-    std::iota(part.begin(), part.end(), 0);
-    const auto find = [&](int i) {
-      while (part[i] != i) i = part[i] = part[part[i]];
-      return i;
-    };
+    UnionFind parts(num_images_);
     std::vector<std::vector<int>> tree_pairs(num_images_);
     for (int p : order) {
       const auto [i, j] = ends_.at(p);
-      if (find(i) == find(j)) continue;
-      part[find(i)] = find(j);
+      if (parts.Find(i) == parts.Find(j)) continue;
+      parts.Union(i, j);
       tree_pairs[i].push_back(p);
       tree_pairs[j].push_back(p);
     }
