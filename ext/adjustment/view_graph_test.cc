@@ -105,13 +105,16 @@ TEST(ViewGraph, AWeakPairIsNotTakenForAFalseOne) {
   EXPECT_TRUE(FindInconsistentPairs(pairs, ViewGraphOptions()).empty());
 }
 
-// The neighbours of a ring of `n` (no triangles), each pair with
-// `num_points` conjugate points, and chords across it from `chords`
-// (image pairs, true rotations).
+// The neighbours of a ring of `n` (no triangles), each rotation up to
+// `noise_deg` off, and chords across it from `chords` (image pairs, the
+// rotations through the neighbours between them).
 std::vector<ViewGraphPair> RingOfNeighbours(
-    int n, unsigned seed, const std::vector<std::pair<int, int>>& chords = {}) {
+    int n,
+    unsigned seed,
+    const std::vector<std::pair<int, int>>& chords = {},
+    double noise_deg = 0.5) {
   std::vector<ViewGraphPair> ring;
-  const std::vector<ViewGraphPair> all = Ring(n, 0.5, {}, seed);
+  const std::vector<ViewGraphPair> all = Ring(n, noise_deg, {}, seed);
   for (const ViewGraphPair& pair : all) {
     if ((pair.image2 - pair.image1 + n) % n == 1) ring.push_back(pair);
   }
@@ -183,13 +186,9 @@ TEST(ViewGraph, LongLoopsAllowForTheirErrorsAndBridgesAreKept) {
   // passes, so even its lightest pair is kept. A false pair that is the
   // only link of an image to the rest cannot be tested.
   for (unsigned seed = 1; seed <= 3; ++seed) {
-    std::vector<ViewGraphPair> pairs;
-    for (ViewGraphPair pair : Ring(30, 2.0, {}, seed)) {
-      if ((pair.image2 - pair.image1 + 30) % 30 == 1) {
-        pair.weight = pairs.empty() ? 50 : 100;
-        pairs.push_back(pair);
-      }
-    }
+    std::vector<ViewGraphPair> pairs = RingOfNeighbours(30, seed, {}, 2.0);
+    for (ViewGraphPair& pair : pairs) pair.weight = 100;
+    pairs[0].weight = 50;
     ViewGraphPair bridge;
     bridge.image1 = 4;
     bridge.image2 = 99;
