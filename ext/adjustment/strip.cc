@@ -16,7 +16,6 @@
 #include "ext/core/file_util.h"
 #include "ext/core/progress.h"
 #include "ext/core/statistics.h"
-#include "ext/core/string_printf.h"
 #include "ext/core/union_find.h"
 
 #include <Eigen/Dense>
@@ -64,29 +63,6 @@ Eigen::Quaterniond ExpRotation(const Eigen::Vector3d& omega) {
 Eigen::Vector3d LogRotation(const Eigen::Quaterniond& q) {
   const Eigen::AngleAxisd aa(q.normalized());
   return aa.angle() * aa.axis();
-}
-
-// Why the view graph left a pair out (view_graph.h), one line.
-std::string WhyDropped(const DroppedPair& dropped,
-                       const ViewGraphOptions& options) {
-  if (dropped.num_triangles > 0) {
-    return StringPrintf(
-        "its rotation disagrees with the loops it lies on (%d of %d "
-        "triangles fail, median loop error %.1f deg, above %g deg and %g "
-        "standard deviations)",
-        dropped.num_failing,
-        dropped.num_triangles,
-        dropped.median_loop_error_deg,
-        options.max_loop_error_deg,
-        options.max_loop_error_sigmas);
-  }
-  return StringPrintf(
-      "its rotation disagrees with a loop of %d pairs through the pairs that "
-      "agree (loop error %.1f deg, allowed %.1f deg), and the loop's other "
-      "pairs have more conjugate points",
-      dropped.loop_length,
-      dropped.loop_error_deg,
-      dropped.loop_limit_deg);
 }
 
 class StripBuilder {

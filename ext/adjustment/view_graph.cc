@@ -4,6 +4,7 @@
 #include "ext/core/errors.h"
 #include "ext/core/rigid3.h"
 #include "ext/core/statistics.h"
+#include "ext/core/string_printf.h"
 #include "ext/core/union_find.h"
 
 #include <algorithm>
@@ -40,6 +41,28 @@ void ViewGraphOptions::Check() const {
               "num_spanning_trees",
               ">= 1",
               num_spanning_trees);
+}
+
+std::string WhyDropped(const DroppedPair& dropped,
+                       const ViewGraphOptions& options) {
+  if (dropped.num_triangles > 0) {
+    return StringPrintf(
+        "its rotation disagrees with the loops it lies on (%d of %d "
+        "triangles fail, median loop error %.1f deg, above %g deg and %g "
+        "standard deviations)",
+        dropped.num_failing,
+        dropped.num_triangles,
+        dropped.median_loop_error_deg,
+        options.max_loop_error_deg,
+        options.max_loop_error_sigmas);
+  }
+  return StringPrintf(
+      "its rotation disagrees with a loop of %d pairs through the pairs that "
+      "agree (loop error %.1f deg, allowed %.1f deg), and the loop's other "
+      "pairs have more conjugate points",
+      dropped.loop_length,
+      dropped.loop_error_deg,
+      dropped.loop_limit_deg);
 }
 
 double RotationAngleDeg(const Eigen::Matrix3d& rotation) {

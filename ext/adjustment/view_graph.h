@@ -90,6 +90,11 @@ struct DroppedPair {
 std::vector<DroppedPair> FindInconsistentPairs(
     const std::vector<ViewGraphPair>& pairs, const ViewGraphOptions& options);
 
+// Why the pair was dropped, one line: the triangles that fail, or the
+// longer loop, with the limits of `options`.
+std::string WhyDropped(const DroppedPair& dropped,
+                       const ViewGraphOptions& options);
+
 // The angle of a rotation matrix, degrees.
 double RotationAngleDeg(const Eigen::Matrix3d& rotation);
 
