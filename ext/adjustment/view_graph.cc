@@ -131,7 +131,7 @@ class LoopConsensus {
   LoopConsensus(const std::vector<ViewGraphPair>& pairs,
                 const std::vector<bool>& active,
                 const ViewGraphOptions& options)
-      : pairs_(pairs), options_(options) {
+      : pairs_(pairs), options_(options), ends_(pairs.size()) {
     std::map<int, int> idx;
     for (size_t p = 0; p < pairs.size(); ++p) {
       if (!active[p]) continue;
@@ -157,7 +157,7 @@ class LoopConsensus {
     const Tree best = Consensus();
     std::vector<DroppedPair> dropped;
     for (int p : active_) {
-      const Loop& loop = best.loops.at(p);
+      const Loop& loop = best.loops[p];
       if (loop.closes) continue;
       std::vector<int> order = {p};
       for (int q : heaviest_first_) {
@@ -182,7 +182,7 @@ class LoopConsensus {
     bool closes = true;
   };
   struct Tree {
-    std::map<int, Loop> loops;  // by pair
+    std::vector<Loop> loops;  // by pair (the active ones)
     double closed_weight = 0;
   };
 
@@ -214,7 +214,7 @@ class LoopConsensus {
     UnionFind parts(num_images_);
     std::vector<std::vector<int>> tree_pairs(num_images_);
     for (int p : order) {
-      const auto [i, j] = ends_.at(p);
+      const auto [i, j] = ends_[p];
       if (parts.Find(i) == parts.Find(j)) continue;
       parts.Union(i, j);
       tree_pairs[i].push_back(p);
@@ -234,7 +234,7 @@ class LoopConsensus {
         const int u = stack.back();
         stack.pop_back();
         for (int p : tree_pairs[u]) {
-          const auto [i, j] = ends_.at(p);
+          const auto [i, j] = ends_[p];
           const int v = i == u ? j : i;
           if (depth[v] >= 0) continue;
           const Eigen::Matrix3d& v_from_u = pairs_[p].rotation;  // j from i
@@ -249,8 +249,9 @@ class LoopConsensus {
       }
     }
     Tree tree;
+    tree.loops.resize(pairs_.size());
     for (int p : active_) {
-      const auto [i, j] = ends_.at(p);
+      const auto [i, j] = ends_[p];
       int a = i, b = j;
       while (depth[a] > depth[b]) a = parent[a];
       while (depth[b] > depth[a]) b = parent[b];
@@ -283,7 +284,7 @@ class LoopConsensus {
   const ViewGraphOptions& options_;
   std::vector<int> active_;
   std::vector<int> heaviest_first_;
-  std::map<int, std::pair<int, int>> ends_;  // pair -> its images' indices
+  std::vector<std::pair<int, int>> ends_;  // by pair: its images' indices
   int num_images_ = 0;
 };
 
