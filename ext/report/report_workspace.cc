@@ -40,8 +40,11 @@ int64_t Integer(const Json& json, const char* key) {
 }
 
 std::string String(const Json& json, const char* key) {
-  const Json& value = Child(json, key);
-  return value.is_string() ? value.get<std::string>() : "";
+  return String(Child(json, key));
+}
+
+std::string String(const Json& json) {
+  return json.is_string() ? json.get<std::string>() : "";
 }
 
 namespace {

@@ -37,6 +37,7 @@ double NumberAt(const Json& json, size_t index);
 int64_t Integer(const Json& json, const char* key);
 // A string, or "".
 std::string String(const Json& json, const char* key);
+std::string String(const Json& json);
 
 // A stage's JSON report.
 struct JsonFile {

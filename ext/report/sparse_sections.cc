@@ -252,8 +252,7 @@ std::string StripNotes(const Json& strip) {
   if (unoriented.is_array() && !unoriented.empty()) {
     std::string names;
     for (const Json& name : unoriented) {
-      names += (names.empty() ? "" : ", ") +
-               HtmlEscape(name.is_string() ? name.get<std::string>() : "");
+      names += (names.empty() ? "" : ", ") + HtmlEscape(String(name));
     }
     html += Paragraph(
         "Not oriented by the strip (no model attached them and "
@@ -276,9 +275,7 @@ std::string StripNotes(const Json& strip) {
   if (dropped.is_array() && !dropped.empty()) {
     std::string items;
     for (const Json& line : dropped) {
-      items += "<li>" +
-               HtmlEscape(line.is_string() ? line.get<std::string>() : "") +
-               "</li>";
+      items += "<li>" + HtmlEscape(String(line)) + "</li>";
     }
     html += Paragraph(FormatCount(dropped.size()) +
                       (dropped.size() == 1 ? " image pair" : " image pairs") +
